@@ -1,0 +1,59 @@
+"""The `tspace` command line: one sub-module per sub-command.
+
+Each sub-module that defines `register(subparsers)` is a sub-command: it adds
+its parser and sets `func` to a callable taking the parsed namespace and
+returning an exit code. `ORDER` (an int) places it in `tspace --help`.
+Sub-modules import their heavy dependencies inside that callable so that
+`tspace --help` stays fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import pkgutil
+import sys
+
+from space.errors import SpaceError
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Return the parser for every sub-command."""
+    parser = argparse.ArgumentParser(
+        prog="tspace",
+        description="A distributed triple space on Eclipse Zenoh for self-configuring robots.",
+    )
+    parser.add_argument(
+        "-v", "--verbose", action="count", default=0, help="more log output (-vv for debug)"
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    modules = [
+        importlib.import_module(f"{__name__}.{info.name}")
+        for info in pkgutil.iter_modules(__path__)
+        if not info.name.startswith("_")
+    ]
+    commands = [m for m in modules if hasattr(m, "register")]
+    for module in sorted(commands, key=lambda m: getattr(m, "ORDER", 100)):
+        module.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run `tspace` and return its exit code; errors become one line on stderr."""
+    args = build_parser().parse_args(argv)
+    level = [logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)]
+    logging.basicConfig(level=level, format="%(asctime)s %(name)s %(levelname)s %(message)s")
+    try:
+        return int(args.func(args) or 0)
+    except SpaceError as exc:
+        print(f"tspace {args.command}: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130
+    except BrokenPipeError:
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

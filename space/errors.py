@@ -1,0 +1,35 @@
+"""Errors of the triple space, named for what went wrong."""
+
+from __future__ import annotations
+
+
+class SpaceError(Exception):
+    """Base class of every error tspace raises on purpose."""
+
+
+class SpaceUnavailable(SpaceError):
+    """No store answered within the timeout (router down or no `tspace serve`)."""
+
+
+class SpaceTimeout(SpaceError):
+    """A store was reachable but did not answer in time."""
+
+
+class ChangesetRejected(SpaceError):
+    """The store refused a changeset (malformed, or it could not persist it)."""
+
+
+class MalformedPayload(SpaceError):
+    """A payload or key from the network could not be decoded."""
+
+
+class TemplateError(SpaceError, ValueError):
+    """A triple template could not be parsed."""
+
+
+class QueryError(SpaceError):
+    """A SPARQL query was rejected by the store (syntax or evaluation error)."""
+
+
+class InputError(SpaceError, ValueError):
+    """A document given by the user (Turtle file, template) is malformed."""
