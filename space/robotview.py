@@ -1,0 +1,185 @@
+"""Read what a person wants to see of each robot out of the space's triples.
+
+One reading of the vocabulary (docs/vocabulary.md) shared by the live view of
+`tspace up`, the scenario checker and the HMI, so they never disagree on what
+"the robot's task" or "the battery" is.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from rdflib import RDF, Graph, Literal, Namespace, URIRef
+from rdflib.term import Node
+
+from space.mirror import ChangeRecord
+from space.terms import Triple
+
+AC = Namespace("https://w3id.org/tspace/selfconfig#")
+
+# Most specific first: a device is shown with the first of its classes listed here.
+DEVICE_CLASSES = (
+    AC.Battery,
+    AC.MobileBase,
+    AC.WheelMotor,
+    AC.LaserScanner,
+    AC.TouchScreen,
+    AC.Speaker,
+    AC.Microphone,
+)
+
+
+@dataclass(frozen=True)
+class DeviceState:
+    """One device of a robot: its name, kind and commanded running mode."""
+
+    name: str
+    kind: str
+    mode: str | None
+
+
+@dataclass(frozen=True)
+class RobotState:
+    """What the live view and the HMI show of one robot.
+
+    Attributes are the local names or literal values of the vocabulary's terms,
+    None where the space does not say.
+    """
+
+    name: str
+    task: str | None
+    task_type: str | None
+    location: str | None
+    battery: str | None
+    speed: str | None
+    devices: tuple[DeviceState, ...]
+
+    def mode(self, kind: str) -> str | None:
+        """Return the running mode of the robot's first device of class `kind`."""
+        return next((d.mode for d in self.devices if d.kind == kind), None)
+
+
+@dataclass(frozen=True)
+class Firing:
+    """A changeset that answered another one (a rule firing or an agent reacting).
+
+    Attributes:
+        seq: its place in the store's order.
+        agent: who wrote it (the reasoner for rule conclusions).
+        time: HH:MM:SS.mmm of its HLC timestamp, or "" if unknown.
+        added: the conclusions, compacted ("ac:robot1_base ac:motion_speed low").
+        removed: what it retracted, compacted.
+        cause_agent: who wrote the cause, if the cause is still remembered.
+        cause: the cause's triples, compacted (empty if forgotten).
+    """
+
+    seq: int
+    agent: str
+    time: str
+    added: tuple[str, ...]
+    removed: tuple[str, ...]
+    cause_agent: str | None
+    cause: tuple[str, ...]
+
+
+def short(term: Node) -> str:
+    """Return a term as a person reads it: `ac:` local names, bare literal values."""
+    if isinstance(term, Literal):
+        return str(term)
+    text = str(term)
+    return "ac:" + text[len(str(AC)) :] if text.startswith(str(AC)) else text
+
+
+def local(term: Node | None) -> str | None:
+    """Return the local name of an `ac:` IRI (or the literal's value); None stays None."""
+    if term is None:
+        return None
+    text = short(term)
+    return text[3:] if text.startswith("ac:") else text
+
+
+def describe(triple: Triple) -> str:
+    """Return one triple as a compact line."""
+    return " ".join(short(t) for t in triple)
+
+
+def _kind(graph: Graph, device: Node) -> str:
+    types = set(graph.objects(device, RDF.type))
+    found = next((c for c in DEVICE_CLASSES if c in types), None)
+    if found is None:
+        found = next((t for t in sorted(types) if short(t).startswith("ac:")), None)
+    return local(found) or "Device"
+
+
+def _robot_names(graph: Graph) -> list[Node]:
+    robots = set(graph.subjects(RDF.type, AC.Robot)) | set(graph.subjects(AC.has_device, None))
+    return sorted(robots)
+
+
+def read_robots(graph: Graph) -> list[RobotState]:
+    """Return the state of every robot in `graph`, sorted by name."""
+    states = []
+    for robot in _robot_names(graph):
+        devices = sorted(graph.objects(robot, AC.has_device))
+        kinds = {d: _kind(graph, d) for d in devices}
+        battery = next((d for d in devices if kinds[d] == "Battery"), None)
+        base = next((d for d in devices if kinds[d] == "MobileBase"), None)
+        task = graph.value(robot, AC.current_task)
+        states.append(
+            RobotState(
+                name=local(robot) or str(robot),
+                task=local(task),
+                task_type=local(graph.value(task, AC.type)) if task is not None else None,
+                location=local(graph.value(robot, AC.location)),
+                battery=local(graph.value(battery, AC.battery_level)) if battery else None,
+                speed=local(graph.value(base, AC.motion_speed)) if base else None,
+                devices=tuple(
+                    DeviceState(
+                        local(d) or str(d), kinds[d], local(graph.value(d, AC.running_mode))
+                    )
+                    for d in devices
+                ),
+            )
+        )
+    return states
+
+
+def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firing]:
+    """Return the last `limit` changesets that name a cause, newest first."""
+    records = list(records)
+    by_id = {r.id: r for r in records}
+    firings = []
+    for record in reversed(records):
+        if record.cause is None:
+            continue
+        cause = by_id.get(record.cause)
+        stamp = record.timestamp.strftime("%H:%M:%S.%f")[:-3] if record.timestamp else ""
+        firings.append(
+            Firing(
+                seq=record.seq,
+                agent=record.agent,
+                time=stamp,
+                added=tuple(describe(t) for t in record.added),
+                removed=tuple(describe(t) for t in record.removed),
+                cause_agent=cause.agent if cause else None,
+                cause=tuple(describe(t) for t in cause.added) if cause else (),
+            )
+        )
+        if len(firings) == limit:
+            break
+    return firings
+
+
+def task_named(graph: Graph, task_type: str) -> URIRef | None:
+    """Return the task individual whose `ac:type` is `task_type`, or None."""
+    found = next(iter(graph.subjects(AC.type, Literal(task_type))), None)
+    return found if isinstance(found, URIRef) else None
+
+
+def battery_of(graph: Graph, robot: str) -> URIRef | None:
+    """Return the battery device of robot `robot` (local name), or None."""
+    for device in graph.objects(AC[robot], AC.has_device):
+        if isinstance(device, URIRef) and _kind(graph, device) == "Battery":
+            return device
+    return None

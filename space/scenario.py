@@ -1,0 +1,197 @@
+"""Scenarios: a story the robots must act out, checked step by step against the space.
+
+A scenario is a list of steps, each a condition on one robot's state that must
+become true, in order, within a time limit after the previous one. A step may
+first act on the space (assign a task). `tspace up --scenario NAME` runs one;
+the paper's example is `battery`.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from space.robotview import AC, RobotState, read_robots, task_named
+
+if TYPE_CHECKING:
+    from space import TripleSpace
+    from space.mirror import SpaceMirror
+
+STEP_TIMEOUT = 90.0
+INTERACTION = ("TouchScreen", "Speaker", "Microphone")
+NAVIGATION = ("WheelMotor", "LaserScanner")
+
+
+@dataclass(frozen=True)
+class Step:
+    """One thing that must happen.
+
+    Attributes:
+        name: what a person should see happen, used in reports.
+        check: true once the step has happened.
+        act: run once (on the caller's thread of `ScenarioRun.tick`) when the
+            step becomes the one awaited, with the space and the robot's name.
+    """
+
+    name: str
+    check: Callable[[RobotState], bool]
+    act: Callable[[TripleSpace, str], None] | None = None
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A named story: its steps and the agent options it needs (e.g. a faster clock)."""
+
+    name: str
+    steps: tuple[Step, ...]
+    agent_args: dict[str, list[str]] = field(default_factory=dict)
+
+
+def _assign(task_type: str) -> Callable[[TripleSpace, str], None]:
+    def act(ts: TripleSpace, robot: str) -> None:
+        task = task_named(ts.query((None, AC.type, None)), task_type)
+        if task is None:
+            raise LookupError(f"the space has no task of type {task_type!r}")
+        ts.write([(AC[robot], AC.requested_task, task)])
+
+    return act
+
+
+def _devices_saving(robot: RobotState) -> bool:
+    kinds = {d.kind for d in robot.devices}
+    if not set(INTERACTION + NAVIGATION) <= kinds:
+        return False
+    return all(d.mode == "stand-by" for d in robot.devices if d.kind in INTERACTION) and all(
+        d.mode == "active" for d in robot.devices if d.kind in NAVIGATION
+    )
+
+
+BATTERY = Scenario(
+    name="battery",
+    steps=(
+        Step(
+            "robot attends a patient (task AttendingPatient)",
+            lambda r: r.task_type == "AttendingPatient",
+            _assign("AttendingPatient"),
+        ),
+        Step("battery drains to very low", lambda r: r.battery == "very low"),
+        Step("robot heads to the dock (task GoingToDock)", lambda r: r.task_type == "GoingToDock"),
+        Step("mobile base slows to low speed", lambda r: r.speed == "low"),
+        Step("screen, speakers, microphone stand-by; wheels, laser stay active", _devices_saving),
+        Step(
+            "robot reaches the dock and docks (location dock, task Docking)",
+            lambda r: r.task_type == "Docking" and (r.location or "").lower().endswith("dock"),
+        ),
+        Step("robot charges (task Charging)", lambda r: r.task_type == "Charging"),
+        Step("battery charged (level normal or full)", lambda r: r.battery in ("normal", "full")),
+        Step(
+            "robot back to work (task AttendingPatient)",
+            lambda r: r.task_type == "AttendingPatient",
+        ),
+    ),
+    agent_args={"hw_monitor": ["--time-scale", "20"]},
+)
+
+SCENARIOS = {s.name: s for s in (BATTERY,)}
+
+
+class ScenarioRun:
+    """Follow one robot through a scenario.
+
+    `observe` is called after every changeset (on the mirror's thread) so that a
+    state that lasts a single changeset, like Docking, is not missed; `tick` is
+    called periodically from the owner's thread to run actions and check time.
+
+    Args:
+        scenario: the story.
+        robot: the robot's local name.
+        on_event: gets one line per completed or failed step (from either thread).
+        step_timeout: seconds each step may take after the previous one.
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        robot: str,
+        on_event: Callable[[str], None],
+        step_timeout: float = STEP_TIMEOUT,
+    ) -> None:
+        self.scenario = scenario
+        self.robot = robot
+        self._on_event = on_event
+        self._timeout = step_timeout
+        self._lock = threading.Lock()
+        self._index = 0
+        self._acted = -1
+        self._since = time.monotonic()
+        self._started = self._since
+        self.failure: str | None = None
+
+    @property
+    def finished(self) -> bool:
+        """Return whether every step has happened."""
+        with self._lock:
+            return self._index == len(self.scenario.steps)
+
+    @property
+    def progress(self) -> str:
+        """Return "step i/n: name" of the step awaited, for the live view."""
+        with self._lock:
+            steps = self.scenario.steps
+            if self._index == len(steps):
+                return f"scenario {self.scenario.name}: completed"
+            return (
+                f"scenario {self.scenario.name}: waiting for step {self._index + 1}/{len(steps)}: "
+                f"{steps[self._index].name}"
+            )
+
+    def observe(self, mirror: SpaceMirror) -> None:
+        """Advance past every step that the space's current state satisfies."""
+        robot = next((r for r in read_robots(mirror.graph()) if r.name == self.robot), None)
+        if robot is None:
+            return
+        with self._lock:
+            steps = self.scenario.steps
+            # A step's action must have run before the step can count as done.
+            while self._index < len(steps) and (
+                steps[self._index].act is None or self._acted == self._index
+            ):
+                if not steps[self._index].check(robot):
+                    break
+                now = time.monotonic()
+                self._index += 1
+                self._on_event(
+                    f"scenario {self.scenario.name}: step {self._index}/{len(steps)} done: "
+                    f"{steps[self._index - 1].name} ({now - self._started:.1f} s)"
+                )
+                self._since = now
+
+    def tick(self, ts: TripleSpace, mirror: SpaceMirror) -> None:
+        """Run the awaited step's action once, then fail it if it is overdue.
+
+        Blocks while the action writes to the space. Sets `failure` (and reports
+        it) when the awaited step did not happen within the step timeout.
+        """
+        with self._lock:
+            index = self._index
+            if index == len(self.scenario.steps) or self.failure is not None:
+                return
+            step = self.scenario.steps[index]
+            pending = step.act is not None and self._acted < index
+            overdue = time.monotonic() - self._since > self._timeout
+        if pending:
+            assert step.act is not None
+            step.act(ts, self.robot)
+            with self._lock:
+                self._acted = index
+                self._since = time.monotonic()
+            self.observe(mirror)
+        elif overdue:
+            self.failure = (
+                f"step {index + 1}/{len(self.scenario.steps)} did not happen within "
+                f"{self._timeout:.0f} s: {step.name}"
+            )
+            self._on_event(f"scenario {self.scenario.name}: FAILED: {self.failure}")
