@@ -51,9 +51,12 @@ class RobotState:
     task: str | None
     task_type: str | None
     location: str | None
+    at_dock: bool
     battery: str | None
+    charge: int | None
     speed: str | None
     devices: tuple[DeviceState, ...]
+    announcement: str | None = None
 
     def mode(self, kind: str) -> str | None:
         """Return the running mode of the robot's first device of class `kind`."""
@@ -126,13 +129,18 @@ def read_robots(graph: Graph) -> list[RobotState]:
         battery = next((d for d in devices if kinds[d] == "Battery"), None)
         base = next((d for d in devices if kinds[d] == "MobileBase"), None)
         task = graph.value(robot, AC.current_task)
+        place = graph.value(robot, AC.location)
+        charge = graph.value(battery, AC.charge_percent) if battery else None
         states.append(
             RobotState(
                 name=local(robot) or str(robot),
                 task=local(task),
                 task_type=local(graph.value(task, AC.type)) if task is not None else None,
-                location=local(graph.value(robot, AC.location)),
+                location=local(place),
+                at_dock=place is not None
+                and (place == graph.value(robot, AC.dock) or (place, RDF.type, AC.Dock) in graph),
                 battery=local(graph.value(battery, AC.battery_level)) if battery else None,
+                charge=int(charge.toPython()) if isinstance(charge, Literal) else None,
                 speed=local(graph.value(base, AC.motion_speed)) if base else None,
                 devices=tuple(
                     DeviceState(
@@ -140,6 +148,7 @@ def read_robots(graph: Graph) -> list[RobotState]:
                     )
                     for d in devices
                 ),
+                announcement=local(graph.value(robot, AC.announcement)),
             )
         )
     return states

@@ -83,7 +83,7 @@ BATTERY = Scenario(
         Step("screen, speakers, microphone stand-by; wheels, laser stay active", _devices_saving),
         Step(
             "robot reaches the dock and docks (location dock, task Docking)",
-            lambda r: r.task_type == "Docking" and (r.location or "").lower().endswith("dock"),
+            lambda r: r.task_type == "Docking" and r.at_dock,
         ),
         Step("robot charges (task Charging)", lambda r: r.task_type == "Charging"),
         Step("battery charged (level normal or full)", lambda r: r.battery in ("normal", "full")),

@@ -1,0 +1,53 @@
+"""`tspace serve`: run the embedded Zenoh router and the space store."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from space.zconfig import DEFAULT_ENDPOINT
+
+ORDER = 20
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the `serve` sub-command."""
+    p = sub.add_parser(
+        "serve",
+        help="run a Zenoh router with the space store (the embedded default)",
+        description="Run a Zenoh router and the persistent store of every space, until Ctrl-C.",
+    )
+    p.add_argument(
+        "--listen",
+        metavar="ENDPOINT",
+        action="append",
+        help=f"endpoint to listen on (repeatable; default {DEFAULT_ENDPOINT})",
+    )
+    p.add_argument(
+        "--connect", metavar="ENDPOINT", action="append", help="other routers to mesh with"
+    )
+    p.add_argument("--config", metavar="FILE", help="a Zenoh JSON5 configuration file")
+    p.add_argument(
+        "--data", metavar="DIR", type=Path, help="where the store persists (default: user data dir)"
+    )
+    p.add_argument(
+        "--fsync", action="store_true", help="fsync every commit (survives power loss, slower)"
+    )
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Serve until interrupted."""
+    import logging
+
+    from space.serve import serve_forever
+
+    logging.getLogger("tspace").setLevel(min(logging.getLogger().level, logging.INFO))
+    serve_forever(
+        listen=args.listen,
+        data_dir=args.data,
+        durable=args.fsync,
+        config_file=args.config,
+        connect=args.connect,
+    )
+    return 0

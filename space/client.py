@@ -1,0 +1,361 @@
+"""TripleSpace: the Triple Space Computing operations over a Zenoh session.
+
+After otsopack/TripCom: `write`, `read`, `query`, `take`, `subscribe`, each
+with a timeout. Every blocking call waits for the store; none may be called
+from inside a Zenoh callback (subscription callbacks run in the library's own
+dispatcher thread, where they are fine).
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+from types import TracebackType
+
+import zenoh
+from rdflib import Graph, URIRef
+from rdflib.query import Result
+
+from space import keys
+from space.changeset import Changeset, pack
+from space.errors import QueryError
+from space.prefixes import PrefixMap
+from space.request import ask_store
+from space.session import open_session
+from space.subscription import Callback, Change, Dispatcher, Subscription
+from space.template import Template
+from space.terms import Triple, triple_from_nt
+
+TemplateLike = Template | tuple | str | None
+Triples = Iterable[Triple] | Graph
+
+
+class TripleSpace:
+    """A handle on one space, over a Zenoh session.
+
+    Built on a session you own (`TripleSpace(session, ...)`), it leaves the
+    session open on `close()`; `TripleSpace.open(...)` opens its own session
+    and closes it. Either way, use it as a context manager.
+    """
+
+    def __init__(
+        self,
+        session: zenoh.Session,
+        space: str = "default",
+        *,
+        agent: str | None = None,
+        prefixes: dict[str, str] | None = None,
+        _owns_session: bool = False,
+    ) -> None:
+        self.session = session
+        self.space = keys.check_space(space)
+        self.agent = agent or f"client-{session.zid()}"
+        self.prefixes = PrefixMap(prefixes)
+        self._owns_session = _owns_session
+        self._dispatcher = Dispatcher(self._fetch_log)
+        self._subscriptions: set[Subscription] = set()
+
+    @classmethod
+    def open(
+        cls,
+        connect: list[str] | str | None = None,
+        *,
+        space: str = "default",
+        agent: str | None = None,
+        config_file: str | None = None,
+        mode: str = "client",
+        prefixes: dict[str, str] | None = None,
+    ) -> TripleSpace:
+        """Open a session to the routers at `connect` and a handle on `space`.
+
+        Raises:
+            SpaceUnavailable: no router reachable.
+        """
+        endpoints = [connect] if isinstance(connect, str) else connect
+        session = open_session(endpoints, mode=mode, config_file=config_file)
+        return cls(session, space, agent=agent, prefixes=prefixes, _owns_session=True)
+
+    def close(self) -> None:
+        """Undeclare every subscription and close the session if this handle opened it."""
+        for sub in list(self._subscriptions):
+            sub.close()
+        self._subscriptions.clear()
+        self._dispatcher.close()
+        if self._owns_session:
+            self.session.close()
+
+    def __enter__(self) -> TripleSpace:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def _key(self, service: str) -> str:
+        return keys.service_key(self.space, service)
+
+    # Writing
+
+    def changeset(
+        self,
+        added: Triples = (),
+        removed: Triples = (),
+        *,
+        inferred_added: Triples = (),
+        inferred_removed: Triples = (),
+        cause: str | None = None,
+    ) -> Changeset:
+        """Build a stamped changeset (not yet sent) from triples or graphs."""
+        cs = Changeset(
+            agent=self.agent,
+            timestamp=str(self.session.new_timestamp()),
+            cause=cause,
+            added=list(added),
+            removed=list(removed),
+            inferred_added=list(inferred_added),
+            inferred_removed=list(inferred_removed),
+        )
+        cs.prefixes = _used_prefixes(cs, [added, removed], self.prefixes)
+        return cs
+
+    def send(self, cs: Changeset, *, timeout: float = 5.0) -> str:
+        """Send a changeset and wait until the store has made it durable; return its id.
+
+        Raises:
+            SpaceUnavailable: no store acknowledged within `timeout`.
+            ChangesetRejected: the store refused it.
+        """
+        ask_store(self.session, self._key("write"), cs.encode(), timeout, what="write")
+        return cs.id
+
+    def send_nowait(self, cs: Changeset) -> str:
+        """Send a changeset without waiting (fire-and-forget twin of `send`); return its id."""
+        self.session.put(
+            self._key("write"), cs.encode(), congestion_control=zenoh.CongestionControl.BLOCK
+        )
+        return cs.id
+
+    def write(self, triples: Triples, *, timeout: float = 5.0, cause: str | None = None) -> str:
+        """Add triples as one changeset; block until durable (see `send`)."""
+        return self.send(self.changeset(triples, cause=cause), timeout=timeout)
+
+    def write_nowait(self, triples: Triples, *, cause: str | None = None) -> str:
+        """Add triples without waiting for the store (for high-rate sensor data)."""
+        return self.send_nowait(self.changeset(triples, cause=cause))
+
+    def remove(self, triples: Triples, *, timeout: float = 5.0, cause: str | None = None) -> str:
+        """Remove triples as one changeset; block until durable."""
+        return self.send(self.changeset((), triples, cause=cause), timeout=timeout)
+
+    def apply(
+        self,
+        added: Triples = (),
+        removed: Triples = (),
+        *,
+        inferred_added: Triples = (),
+        inferred_removed: Triples = (),
+        cause: str | None = None,
+        timeout: float = 5.0,
+    ) -> str:
+        """Apply removals then additions atomically, as one changeset; block until durable."""
+        cs = self.changeset(
+            added,
+            removed,
+            inferred_added=inferred_added,
+            inferred_removed=inferred_removed,
+            cause=cause,
+        )
+        return self.send(cs, timeout=timeout)
+
+    def apply_nowait(
+        self,
+        added: Triples = (),
+        removed: Triples = (),
+        *,
+        inferred_added: Triples = (),
+        inferred_removed: Triples = (),
+        cause: str | None = None,
+    ) -> str:
+        """Fire-and-forget twin of `apply`."""
+        cs = self.changeset(
+            added,
+            removed,
+            inferred_added=inferred_added,
+            inferred_removed=inferred_removed,
+            cause=cause,
+        )
+        return self.send_nowait(cs)
+
+    @contextmanager
+    def transaction(self, *, timeout: float = 5.0) -> Iterator[Transaction]:
+        """Collect additions and removals, then send them as one changeset on exit."""
+        tx = Transaction()
+        yield tx
+        tx.id = self.apply(tx.added, tx.removed, timeout=timeout)
+
+    # Reading
+
+    def _ask(self, request: dict, timeout: float) -> dict:
+        return ask_store(self.session, self._key("query"), pack(request), timeout, what="query")
+
+    def _template(self, template: TemplateLike) -> Template:
+        return Template.of(template, self.prefixes)
+
+    def _graph(self, reply: dict) -> Graph:
+        graph = Graph()
+        for name in (keys.ASSERTED, keys.INFERRED):
+            for t in reply.get(name) or ():
+                graph.add(triple_from_nt(t))
+        for name, ns in self.prefixes.as_dict().items():
+            graph.bind(name, ns, override=True)
+        return graph
+
+    def read(self, template: TemplateLike = None, *, timeout: float = 5.0) -> Graph:
+        """Return the matching triples of one subject (the first in IRI order)."""
+        t = self._template(template)
+        return self._graph(self._ask({"op": "read", "template": t.to_wire()}, timeout))
+
+    def query(
+        self, template: TemplateLike = None, *, graph: str = "all", timeout: float = 5.0
+    ) -> Graph:
+        """Return every matching triple of the asserted, inferred or `all` graphs."""
+        t = self._template(template)
+        return self._graph(
+            self._ask({"op": "query", "template": t.to_wire(), "graph": graph}, timeout)
+        )
+
+    def take(self, template: TemplateLike = None, *, timeout: float = 5.0) -> Graph:
+        """Remove every matching asserted triple and return them, atomically at the store."""
+        t = self._template(template)
+        request = {
+            "op": "take",
+            "template": t.to_wire(),
+            "agent": self.agent,
+            "ts": str(self.session.new_timestamp()),
+        }
+        return self._graph(self._ask(request, timeout))
+
+    def snapshot(self, template: TemplateLike = None, *, timeout: float = 5.0) -> tuple[Graph, int]:
+        """Return the matching state (both graphs) and the sequence number it reflects."""
+        t = self._template(template)
+        reply = self._ask({"op": "snapshot", "template": t.to_wire()}, timeout)
+        return self._graph(reply), int(reply.get("seq") or 0)
+
+    def query_sparql(self, text: str, *, timeout: float = 5.0) -> Result:
+        """Run a SPARQL SELECT, ASK or CONSTRUCT over the union of both graphs.
+
+        Raises:
+            QueryError: the store rejected the query.
+        """
+        reply = self._ask({"op": "sparql", "text": text}, timeout)
+        body = reply.get("body") or b""
+        if reply.get("type") in ("CONSTRUCT", "DESCRIBE"):
+            result = Result(reply["type"])
+            result.graph = Graph().parse(data=body, format="nt")
+            return result
+        try:
+            return Result.parse(io.BytesIO(body), format="json")
+        except ValueError as exc:
+            raise QueryError(f"unreadable SPARQL result: {exc}") from exc
+
+    # Watching
+
+    def subscribe(
+        self,
+        template: TemplateLike,
+        callback: Callback,
+        *,
+        snapshot: bool = False,
+        timeout: float = 5.0,
+    ) -> Subscription:
+        """Call `callback(change)` for every later changeset with triples matching `template`.
+
+        With `snapshot=True` the first call carries the current matching state.
+        Callbacks run in this handle's dispatcher thread, one at a time, in store order.
+
+        Raises:
+            SpaceUnavailable: no store answered (the sequence number is needed to fill gaps).
+        """
+        t = self._template(template)
+        sub = Subscription(self._dispatcher, t, callback)
+        self._dispatcher.add(sub)
+        sub.attach(
+            self.session.declare_subscriber(self._key("changes"), self._dispatcher.feed(sub))
+        )
+        self._subscriptions.add(sub)
+        try:
+            if snapshot:
+                graph, seq = self.snapshot(t, timeout=timeout)
+                initial = Change(
+                    agent="",
+                    seq=seq,
+                    added=list(graph),
+                    bindings=[b for x in graph if (b := t.match(x)) is not None],
+                )
+            else:
+                seq, initial = self._seq(timeout), None
+        except BaseException:
+            self.unsubscribe(sub)
+            raise
+        self._dispatcher.mark_ready(sub, seq, initial)
+        return sub
+
+    def unsubscribe(self, sub: Subscription) -> None:
+        """Stop a subscription."""
+        sub.close()
+        self._subscriptions.discard(sub)
+
+    def _seq(self, timeout: float) -> int:
+        reply = ask_store(
+            self.session, self._key("log"), pack({"from": 1, "to": 0}), timeout, what="log request"
+        )
+        return int(reply.get("seq") or 0)
+
+    def _fetch_log(self, first: int, last: int) -> list[bytes]:
+        reply = ask_store(
+            self.session,
+            self._key("log"),
+            pack({"from": first, "to": last}),
+            5.0,
+            what="log request",
+        )
+        return [bytes(p) for p in reply.get("changes") or ()]
+
+
+class Transaction:
+    """Additions and removals collected for one changeset (see `TripleSpace.transaction`)."""
+
+    def __init__(self) -> None:
+        self.added: list[Triple] = []
+        self.removed: list[Triple] = []
+        self.id: str | None = None
+
+    def add(self, triple: Triple) -> None:
+        """Add a triple when the transaction commits."""
+        self.added.append(triple)
+
+    def remove(self, triple: Triple) -> None:
+        """Remove a triple when the transaction commits (before the additions)."""
+        self.removed.append(triple)
+
+
+def _used_prefixes(cs: Changeset, sources: list[Triples], own: PrefixMap) -> dict[str, str]:
+    """Return the prefix bindings (of the given graphs and our own) whose namespace is used."""
+    by_ns = {ns: name for name, ns in own.as_dict().items()}
+    for source in sources:
+        if isinstance(source, Graph):
+            by_ns.update({str(ns): str(n) for n, ns in source.namespaces() if n})
+    used: dict[str, str] = {}
+    for t in (*cs.added, *cs.removed, *cs.inferred_added, *cs.inferred_removed):
+        for term in t:
+            if isinstance(term, URIRef):
+                text = str(term)
+                ns = text[: max(text.rfind("#"), text.rfind("/")) + 1]
+                if ns in by_ns:
+                    used[by_ns[ns]] = ns
+    return used

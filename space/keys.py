@@ -1,0 +1,125 @@
+"""Triples and templates <-> Zenoh key expressions.
+
+A triple travels as `<prefix>/<space>/<graph>/<s>/<p>/<o>`, one chunk per term,
+so that a plain Zenoh subscriber filters by subject and/or predicate with `*`
+and `**`. A chunk is the term's N-Triples text with IRIs compacted through the
+space's prefix table, then percent-escaped where Zenoh forbids a character
+(`/ * $ ? #` and `%` itself). The service keys start with `@`, a verbatim chunk
+that `*` and `**` never match, so a wildcard on the data never sees them.
+See docs/wire-format.md.
+"""
+
+from __future__ import annotations
+
+import re
+
+from rdflib import BNode, Literal, URIRef
+from rdflib.term import Node
+
+from space.errors import MalformedPayload
+from space.prefixes import PrefixMap
+from space.terms import Triple, from_nt, to_nt
+
+ROOT = "tspace"
+ASSERTED = "t"
+INFERRED = "i"
+GRAPHS = (ASSERTED, INFERRED)
+
+_SPACE_RE = re.compile(r"^[A-Za-z0-9_.\-]+$")
+_FORBIDDEN = {"%": "%25", "/": "%2F", "*": "%2A", "$": "%24", "?": "%3F", "#": "%23"}
+_FORBIDDEN_RE = re.compile(r"[%/*$?#]")
+_ESCAPED_RE = re.compile(r"%(25|2F|2A|24|3F|23)", re.I)
+_TYPED_PNAME_RE = re.compile(r'^(".*")\^\^([^<>"]+)$', re.S)
+
+
+def check_space(name: str) -> str:
+    """Return a space name that is one legal key chunk, or raise ValueError."""
+    if not _SPACE_RE.match(name):
+        raise ValueError(f"space name {name!r}: use letters, digits, '_', '-' or '.'")
+    return name
+
+
+def service_key(space: str, service: str, root: str = ROOT) -> str:
+    """Return the key of a store service (`write`, `query`, `changes`, ...)."""
+    return f"{root}/{space}/@/{service}"
+
+
+def escape(text: str) -> str:
+    """Percent-escape the characters Zenoh forbids in a key chunk."""
+    return _FORBIDDEN_RE.sub(lambda m: _FORBIDDEN[m.group(0)], text)
+
+
+def unescape(chunk: str) -> str:
+    """Undo `escape`."""
+    return _ESCAPED_RE.sub(lambda m: chr(int(m.group(1), 16)), chunk)
+
+
+def term_chunk(term: Node, prefixes: PrefixMap) -> str:
+    """Return the key chunk of a term."""
+    if isinstance(term, URIRef):
+        text = prefixes.compact(str(term)) or f"<{term}>"
+    elif isinstance(term, Literal) and term.datatype is not None and not term.language:
+        nt = to_nt(term)
+        pname = prefixes.compact(str(term.datatype))
+        text = nt[: nt.rindex("^^")] + "^^" + pname if pname and nt.endswith(">") else nt
+    else:
+        text = to_nt(term)
+    return escape(text)
+
+
+def chunk_term(chunk: str, prefixes: PrefixMap) -> Node:
+    """Parse a key chunk back into a term.
+
+    Raises:
+        MalformedPayload: the chunk is not a term or names an unknown prefix.
+    """
+    text = unescape(chunk)
+    if text[:1] in ("<", '"') or text.startswith("_:"):
+        typed = _TYPED_PNAME_RE.match(text) if text[0] == '"' else None
+        if typed:
+            datatype = prefixes.expand(typed.group(2))
+            if datatype is None:
+                raise MalformedPayload(f"unknown prefix in key chunk {chunk!r}")
+            text = f"{typed.group(1)}^^<{datatype}>"
+        return from_nt(text)
+    iri = prefixes.expand(text)
+    if iri is None:
+        raise MalformedPayload(f"unknown prefix in key chunk {chunk!r}")
+    return iri
+
+
+def triple_key(
+    space: str, graph: str, triple: Triple, prefixes: PrefixMap, root: str = ROOT
+) -> str:
+    """Return the key of one triple in the asserted (`t`) or inferred (`i`) graph."""
+    s, p, o = (term_chunk(term, prefixes) for term in triple)
+    return f"{root}/{space}/{graph}/{s}/{p}/{o}"
+
+
+def parse_triple_key(key: str, prefixes: PrefixMap) -> tuple[str, str, Triple]:
+    """Return `(space, graph, triple)` of a triple key.
+
+    Raises:
+        MalformedPayload: the key is not `<root>/<space>/<graph>/<s>/<p>/<o>`.
+    """
+    parts = str(key).split("/")
+    if len(parts) != 6 or parts[2] not in GRAPHS:
+        raise MalformedPayload(f"not a triple key: {key!r}")
+    s, p, o = (chunk_term(chunk, prefixes) for chunk in parts[3:])
+    if isinstance(s, Literal) or not isinstance(p, URIRef):
+        raise MalformedPayload(f"not a valid RDF triple key: {key!r}")
+    return parts[1], parts[2], (s, p, o)
+
+
+def template_key(
+    space: str, graph: str, template: tuple, prefixes: PrefixMap, root: str = ROOT
+) -> str:
+    """Return the key expression that selects the triples a template may match.
+
+    Variables and None become `*`; a literal object is kept (exact match).
+    """
+    chunks = [
+        "*" if t is None or not isinstance(t, URIRef | Literal | BNode) else term_chunk(t, prefixes)
+        for t in template
+    ]
+    return f"{root}/{space}/{graph}/{'/'.join(chunks)}"

@@ -1,0 +1,43 @@
+"""Presence: which agents are alive, through Zenoh liveliness tokens."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import zenoh
+
+from space import keys
+
+
+def agent_key(space: str, name: str, root: str = keys.ROOT) -> str:
+    """Return the liveliness key of an agent."""
+    return f"{root}/{space}/@agents/{keys.escape(name)}"
+
+
+def declare_agent(session: zenoh.Session, space: str, name: str) -> zenoh.LivelinessToken:
+    """Declare that agent `name` is alive in `space` until the token is undeclared."""
+    return session.liveliness().declare_token(agent_key(space, name))
+
+
+def alive_agents(session: zenoh.Session, space: str, timeout: float = 2.0) -> list[str]:
+    """Return the names of the agents alive in `space` now."""
+    names = []
+    for reply in session.liveliness().get(agent_key(space, "*"), timeout=timeout):
+        if reply.ok is not None:
+            names.append(keys.unescape(str(reply.ok.key_expr).rsplit("/", 1)[1]))
+    return sorted(names)
+
+
+def watch_agents(
+    session: zenoh.Session, space: str, callback: Callable[[str, bool], None]
+) -> zenoh.Subscriber:
+    """Call `callback(name, alive)` as agents come and go (from a Zenoh thread: don't block).
+
+    Agents already alive are reported first.
+    """
+
+    def on_sample(sample: zenoh.Sample) -> None:
+        name = keys.unescape(str(sample.key_expr).rsplit("/", 1)[1])
+        callback(name, sample.kind == zenoh.SampleKind.PUT)
+
+    return session.liveliness().declare_subscriber(agent_key(space, "*"), on_sample, history=True)

@@ -1,0 +1,66 @@
+"""The embedded default: a Zenoh router and the space store in one process."""
+
+from __future__ import annotations
+
+import logging
+import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import zenoh
+
+from space.store.server import StoreServer
+from space.zconfig import make_config
+
+log = logging.getLogger("tspace.serve")
+
+
+@contextmanager
+def open_server(
+    listen: list[str] | None = None,
+    data_dir: Path | None = None,
+    *,
+    durable: bool = False,
+    config_file: str | None = None,
+    connect: list[str] | None = None,
+) -> Iterator[StoreServer]:
+    """Open a router-mode Zenoh session with the store on it; close both on exit."""
+    from space.paths import default_data_dir
+
+    conf = make_config(mode="router", listen=listen, connect=connect, config_file=config_file)
+    session = zenoh.open(conf)
+    try:
+        listener = session.info.declare_transport_events_listener(_log_transport)
+        server = StoreServer(session, data_dir or default_data_dir(), durable=durable)
+        server.start()
+        try:
+            yield server
+        finally:
+            server.close()
+            listener.undeclare()
+    finally:
+        session.close()
+
+
+def _log_transport(event: zenoh.TransportEvent) -> None:
+    t = event.transport
+    verb = "connected" if event.kind == zenoh.SampleKind.PUT else "disconnected"
+    log.info("%s %s %s", t.whatami, t.zid, verb)
+
+
+def serve_forever(**kwargs: object) -> None:
+    """Run `open_server(**kwargs)` until SIGINT or SIGTERM."""
+    stop = threading.Event()
+    previous = {
+        sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)
+    }
+    try:
+        with open_server(**kwargs) as server:  # type: ignore[arg-type]
+            log.info("serving spaces from %s", server.data_dir)
+            stop.wait()
+            log.info("stopping")
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)

@@ -1,0 +1,200 @@
+"""Gap-free change delivery: subscribe first, learn the store's sequence, fill gaps from its log.
+
+Zenoh callbacks only hand payloads to a queue; a dispatcher thread per
+`TripleSpace` orders them by sequence number, drops duplicates, fetches what
+was missed, and calls the user's callbacks. A slow callback therefore delays
+later changes but never blocks Zenoh.
+"""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import zenoh
+from rdflib.term import Node
+
+from space.changeset import Changeset
+from space.errors import MalformedPayload, SpaceError
+from space.template import Template
+
+log = logging.getLogger("tspace.subscription")
+
+
+@dataclass
+class Change(Changeset):
+    """The part of one changeset that matches a subscription's template."""
+
+    bindings: list[dict[str, Node]] = field(default_factory=list)
+
+
+Callback = Callable[[Change], None]
+
+
+class Subscription:
+    """One `subscribe()`: a template, a callback and the last sequence number delivered.
+
+    Close it with `close()` (or `TripleSpace.unsubscribe`).
+    """
+
+    def __init__(self, dispatcher: Dispatcher, template: Template, callback: Callback) -> None:
+        self.template = template
+        self.callback = callback
+        self.last_seq = 0
+        self.ready = False
+        self.early: list[bytes] = []
+        self.initial: Change | None = None
+        self._dispatcher = dispatcher
+        self._subscriber: zenoh.Subscriber | None = None
+
+    def attach(self, subscriber: zenoh.Subscriber) -> None:
+        """Take ownership of the Zenoh subscriber that feeds this subscription."""
+        self._subscriber = subscriber
+
+    def close(self) -> None:
+        """Stop receiving changes; the callback is not called again."""
+        if self._subscriber is not None:
+            self._subscriber.undeclare()
+            self._subscriber = None
+        self._dispatcher.forget(self)
+
+    def filter(self, cs: Changeset) -> Change | None:
+        """Return the matching part of a changeset, or None if nothing matches."""
+        t = self.template
+        lists = [
+            [x for x in triples if t.match(x) is not None]
+            for triples in (cs.added, cs.removed, cs.inferred_added, cs.inferred_removed)
+        ]
+        if not any(lists):
+            return None
+        bindings = [b for x in (y for ys in lists for y in ys) if (b := t.match(x))]
+        return Change(
+            id=cs.id,
+            agent=cs.agent,
+            timestamp=cs.timestamp,
+            cause=cs.cause,
+            seq=cs.seq,
+            added=lists[0],
+            removed=lists[1],
+            inferred_added=lists[2],
+            inferred_removed=lists[3],
+            bindings=bindings,
+        )
+
+
+Fetch = Callable[[int, int], list[bytes]]
+
+
+class Dispatcher:
+    """The thread that delivers changes to every subscription of one `TripleSpace`."""
+
+    def __init__(self, fetch_log: Fetch) -> None:
+        self._fetch_log = fetch_log
+        self._queue: queue.SimpleQueue[tuple[Subscription, bytes | None] | None] = (
+            queue.SimpleQueue()
+        )
+        self._subs: set[Subscription] = set()
+        self._thread = threading.Thread(target=self._run, name="tspace-dispatch", daemon=True)
+        self._started = False
+        self._lock = threading.Lock()
+
+    def feed(self, sub: Subscription) -> Callable[[zenoh.Sample], None]:
+        """Return the Zenoh callback that feeds a subscription (it only enqueues)."""
+
+        def callback(sample: zenoh.Sample) -> None:
+            self._queue.put((sub, sample.payload.to_bytes()))
+
+        return callback
+
+    def add(self, sub: Subscription) -> None:
+        """Register a subscription, starting the thread on first use."""
+        with self._lock:
+            self._subs.add(sub)
+            if not self._started:
+                self._started = True
+                self._thread.start()
+
+    def mark_ready(self, sub: Subscription, seq: int, initial: Change | None = None) -> None:
+        """Tell the thread that `sub` has seen everything up to `seq`.
+
+        `initial` (the snapshot, if asked for) is delivered before any later change.
+        """
+        sub.last_seq = seq
+        sub.initial = initial
+        self._queue.put((sub, None))
+
+    def forget(self, sub: Subscription) -> None:
+        """Stop delivering to a subscription."""
+        with self._lock:
+            self._subs.discard(sub)
+
+    def close(self) -> None:
+        """Stop the thread after what is queued."""
+        with self._lock:
+            started = self._started
+        if started:
+            self._queue.put(None)
+            if threading.current_thread() is not self._thread:
+                self._thread.join(timeout=5)
+
+    def _run(self) -> None:
+        while (item := self._queue.get()) is not None:
+            sub, payload = item
+            with self._lock:
+                alive = sub in self._subs
+            if not alive:
+                continue
+            if payload is None:
+                sub.ready = True
+                if sub.initial is not None:
+                    self._call(sub, sub.initial)
+                    sub.initial = None
+                early, sub.early = sub.early, []
+                for entry in early:
+                    self._process(sub, entry)
+            elif not sub.ready:
+                sub.early.append(payload)
+            else:
+                self._process(sub, payload)
+
+    def _process(self, sub: Subscription, payload: bytes) -> None:
+        try:
+            cs = Changeset.decode(payload)
+        except MalformedPayload as exc:
+            log.warning("malformed change skipped: %s", exc)
+            return
+        if cs.seq <= sub.last_seq:
+            return
+        if cs.seq > sub.last_seq + 1:
+            self._fill_gap(sub, cs.seq - 1)
+        self._deliver(sub, cs)
+
+    def _fill_gap(self, sub: Subscription, last: int) -> None:
+        try:
+            missed = self._fetch_log(sub.last_seq + 1, last)
+        except SpaceError as exc:
+            log.warning("could not fetch changes %d..%d: %s", sub.last_seq + 1, last, exc)
+            return
+        for payload in missed:
+            try:
+                cs = Changeset.decode(payload)
+            except MalformedPayload as exc:
+                log.warning("malformed logged change skipped: %s", exc)
+                continue
+            if cs.seq > sub.last_seq:
+                self._deliver(sub, cs)
+
+    def _deliver(self, sub: Subscription, cs: Changeset) -> None:
+        sub.last_seq = cs.seq
+        change = sub.filter(cs)
+        if change is not None:
+            self._call(sub, change)
+
+    def _call(self, sub: Subscription, change: Change) -> None:
+        try:
+            sub.callback(change)
+        except Exception:  # a user's callback must not stop delivery to the others
+            log.exception("subscription callback failed on change %s", change.id)

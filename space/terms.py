@@ -1,0 +1,101 @@
+"""RDF terms <-> their N-Triples text, the form terms take on the wire and on disk.
+
+N-Triples is the one term syntax every RDF tool reads, so a program that knows
+nothing of tspace can still produce and read our payloads. Parsing is cached:
+the same few thousand terms (devices, levels, predicates) recur in every change.
+"""
+
+from __future__ import annotations
+
+import re
+from functools import lru_cache
+
+from rdflib import BNode, Literal, URIRef
+from rdflib.term import Node
+
+from space.errors import MalformedPayload
+
+Triple = tuple[Node, Node, Node]
+
+_ESCAPES = {"\\": "\\\\", '"': '\\"', "\n": "\\n", "\r": "\\r", "\t": "\\t"}
+_ESCAPE_RE = re.compile(r'[\\"\n\r\t]')
+_UNESCAPE_RE = re.compile(r'\\(u[0-9A-Fa-f]{4}|U[0-9A-Fa-f]{8}|[tbnrf"\'\\])')
+_SIMPLE = {"t": "\t", "b": "\b", "n": "\n", "r": "\r", "f": "\f", '"': '"', "'": "'", "\\": "\\"}
+_LITERAL_RE = re.compile(
+    r'^"((?:[^"\\]|\\.)*)"(?:\^\^<([^>]*)>|@([A-Za-z]+(?:-[A-Za-z0-9]+)*))?$', re.S
+)
+_XSD_STRING = "http://www.w3.org/2001/XMLSchema#string"
+
+
+def _unescape(text: str) -> str:
+    if "\\" not in text:
+        return text
+
+    def one(match: re.Match[str]) -> str:
+        code = match.group(1)
+        return chr(int(code[1:], 16)) if code[0] in "uU" else _SIMPLE[code]
+
+    return _UNESCAPE_RE.sub(one, text)
+
+
+def to_nt(term: Node) -> str:
+    """Return the N-Triples text of an rdflib term."""
+    if isinstance(term, URIRef):
+        return f"<{term}>"
+    if isinstance(term, Literal):
+        text = '"' + _ESCAPE_RE.sub(lambda m: _ESCAPES[m.group(0)], str(term)) + '"'
+        if term.language:
+            return f"{text}@{term.language}"
+        if term.datatype is not None and str(term.datatype) != _XSD_STRING:
+            return f"{text}^^<{term.datatype}>"
+        return text
+    if isinstance(term, BNode):
+        return f"_:{term}"
+    raise TypeError(f"not an RDF term: {term!r}")
+
+
+@lru_cache(maxsize=65536)
+def from_nt(text: str) -> Node:
+    """Parse the N-Triples text of one term.
+
+    Raises:
+        MalformedPayload: the text is not an N-Triples term.
+    """
+    if not isinstance(text, str) or not text:
+        raise MalformedPayload(f"not an N-Triples term: {text!r}")
+    first = text[0]
+    if first == "<" and text[-1] == ">" and len(text) > 2:
+        return URIRef(text[1:-1])
+    if first == '"':
+        match = _LITERAL_RE.match(text)
+        if match is None:
+            raise MalformedPayload(f"not an N-Triples literal: {text!r}")
+        lexical, datatype, lang = match.groups()
+        value = _unescape(lexical)
+        if lang:
+            return Literal(value, lang=lang)
+        if datatype and datatype != _XSD_STRING:
+            return Literal(value, datatype=URIRef(datatype))
+        return Literal(value)
+    if text.startswith("_:") and len(text) > 2:
+        return BNode(text[2:])
+    raise MalformedPayload(f"not an N-Triples term: {text!r}")
+
+
+def triple_from_nt(parts: object) -> Triple:
+    """Parse a `[s, p, o]` list of N-Triples texts, checking positions.
+
+    Raises:
+        MalformedPayload: not three terms, or a literal as subject or predicate.
+    """
+    if not isinstance(parts, list | tuple) or len(parts) != 3:
+        raise MalformedPayload(f"a triple is a list of three terms, got {parts!r}")
+    s, p, o = (from_nt(part) for part in parts)
+    if isinstance(s, Literal) or not isinstance(p, URIRef):
+        raise MalformedPayload(f"not a valid RDF triple: {parts!r}")
+    return s, p, o
+
+
+def triple_to_nt(triple: Triple) -> list[str]:
+    """Return the `[s, p, o]` N-Triples texts of a triple."""
+    return [to_nt(triple[0]), to_nt(triple[1]), to_nt(triple[2])]
