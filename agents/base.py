@@ -1,0 +1,286 @@
+"""One lifecycle for every agent process, after py_trees' behaviours.
+
+An agent is constructed without side effects; `setup()` opens the space,
+declares the agent's liveliness token and rebuilds its view (snapshot, then
+every change after it, with no gap); `run()` pulls changes from a queue and
+ticks the agent until `stop()`; `shutdown()` closes everything in reverse
+order. Space callbacks only enqueue, so nothing ever blocks inside Zenoh.
+`run_agent(cls, argv)` is the `__main__` of every `agents/NAME.py`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import queue
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import ClassVar
+
+import zenoh
+from rdflib import URIRef
+from rdflib.term import Node
+
+from agents.view import AC, View
+from space import Change, SpaceError, SpaceTimeout, SpaceUnavailable, Subscription, TripleSpace
+from space.cli.options import add_connect
+from space.presence import declare_agent
+
+Values = Mapping[tuple[Node, Node], Node | None]
+
+
+def robot_iri(text: str) -> URIRef:
+    """Return the IRI of a robot given as an IRI, `ac:name` or a bare local name."""
+    if "://" in text or text.startswith("urn:"):
+        return URIRef(text)
+    return AC[text.removeprefix("ac:")]
+
+
+def local_name(iri: URIRef) -> str:
+    """Return the part of an IRI after its last `#` or `/`."""
+    return str(iri).rsplit("#", 1)[-1].rsplit("/", 1)[-1]
+
+
+class SimClock:
+    """Simulated seconds: wall time since construction times `scale`.
+
+    Drivers integrate over simulated time so that tests and scenarios can run
+    a battery's hour in seconds with `--time-scale`.
+    """
+
+    def __init__(self, scale: float = 1.0) -> None:
+        self.scale = scale
+        self._start = time.monotonic()
+
+    def now(self) -> float:
+        """Return the simulated seconds elapsed."""
+        return (time.monotonic() - self._start) * self.scale
+
+
+class Agent:
+    """Base of every agent process: subclasses override the hooks at the end.
+
+    Attributes:
+        kind: the agent's kind, the first part of its default name.
+        args: the parsed command line.
+        robot: the robot this agent serves.
+        name: the agent's name in logs, liveliness and changesets.
+        view: the agent's local copy of the space.
+        ts: the space, once `setup()` opened it.
+    """
+
+    kind: ClassVar[str] = "agent"
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        self.args = args
+        self.robot = robot_iri(args.robot)
+        self.name: str = args.name or f"{self.kind}.{local_name(self.robot)}"
+        self.log = logging.getLogger(self.name)
+        self.clock = SimClock(args.time_scale)
+        self.view = View()
+        self.ts: TripleSpace | None = None
+        self.started = False
+        self._token: zenoh.LivelinessToken | None = None
+        self._subscription: Subscription | None = None
+        self._inbox: queue.SimpleQueue[Change | None] = queue.SimpleQueue()
+        self._stop = threading.Event()
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        """Add the agent's own options to its parser (none by default)."""
+
+    # Lifecycle
+
+    def setup(self) -> None:
+        """Open the space, declare liveliness, subscribe with a snapshot.
+
+        Blocks until the store answers, retrying for `--wait` seconds (a store
+        started at the same time may not be up yet) or until `stop()`.
+
+        Raises:
+            SpaceUnavailable: no router, or no store within `--wait` seconds.
+        """
+        self.ts = TripleSpace.open(
+            self.args.connect, space=self.args.space, agent=self.name, config_file=self.args.config
+        )
+        self._token = declare_agent(self.ts.session, self.ts.space, self.name)
+        deadline = time.monotonic() + self.args.wait
+        while True:
+            try:
+                self._subscription = self.subscribe()
+                break
+            except (SpaceUnavailable, SpaceTimeout) as exc:
+                if time.monotonic() >= deadline or self._stop.is_set():
+                    raise SpaceUnavailable(
+                        f"no store answered in {self.args.wait} s: {exc}"
+                    ) from exc
+                self.log.info("waiting for the store: %s", exc)
+                self._stop.wait(0.5)
+        self.log.info("connected to space %r as %s", self.ts.space, self.name)
+
+    def subscribe(self) -> Subscription:
+        """Subscribe to the space; the first change delivered is the snapshot.
+
+        Blocking; called by `setup()`. The reasoner overrides it to load the
+        asserted graph on its own.
+        """
+        assert self.ts is not None
+        return self.ts.subscribe(None, self._inbox.put, snapshot=True, timeout=self.args.timeout)
+
+    def run(self) -> None:
+        """Handle changes and tick every `--tick` seconds until `stop()`."""
+        next_tick = time.monotonic()
+        while not self._stop.is_set():
+            try:
+                change = self._inbox.get(timeout=max(0.0, next_tick - time.monotonic()))
+            except queue.Empty:
+                change = None
+            if change is not None:
+                self._handle(change)
+            if self.started and time.monotonic() >= next_tick:
+                self._guarded(self.tick, "tick")
+                next_tick = time.monotonic() + self.args.tick
+            elif not self.started:
+                next_tick = time.monotonic() + self.args.tick
+
+    def stop(self) -> None:
+        """Make `run()` return soon; safe from a signal handler or another thread."""
+        self._stop.set()
+        self._inbox.put(None)
+
+    def shutdown(self) -> None:
+        """Close the subscription, the liveliness token and the space, in that order."""
+        try:
+            if self._subscription is not None:
+                self._subscription.close()
+            if self._token is not None:
+                self._token.undeclare()
+        finally:
+            if self.ts is not None:
+                self.ts.close()
+            self._subscription, self._token, self.ts = None, None, None
+
+    # Handling
+
+    def _handle(self, change: Change) -> None:
+        self.view.apply(change)
+        if not self.started:
+            self.started = True
+            self.log.info("view rebuilt from the space: %d triples", len(self.view.graph))
+            self._guarded(self.on_start, "start")
+        else:
+            self._guarded(lambda: self.on_change(change), f"change {change.id}")
+
+    def _guarded(self, step: Callable[[], None], what: str) -> None:
+        """Run one step; what comes from the network may be malformed: log it, go on."""
+        try:
+            step()
+        except SpaceError as exc:
+            self.log.warning("%s: %s", what, exc)
+        except Exception:
+            self.log.exception("%s failed, skipped", what)
+
+    # Writing
+
+    def set_values(self, values: Values, *, cause: str | None = None) -> str | None:
+        """Write single-valued states as one changeset; return its id, None if nothing changed.
+
+        `values` maps (subject, predicate) to the new object (None removes the
+        state). The view is updated at once so the next tick sees it. Blocks
+        until the store made the change durable.
+
+        Raises:
+            SpaceError: the store did not take it (the view is left as it was).
+        """
+        assert self.ts is not None
+        added, removed = [], []
+        for (s, p), o in values.items():
+            old = self.view.objects(s, p)
+            if o is not None and old == [o]:
+                continue
+            removed += [(s, p, x) for x in old if x != o]
+            if o is not None and o not in old:
+                added.append((s, p, o))
+        if not added and not removed:
+            return None
+        self.view.remove(removed)
+        self.view.add(added)
+        try:
+            return self.ts.apply(added, removed, cause=cause, timeout=self.args.timeout)
+        except SpaceError:
+            self.view.remove(added)
+            self.view.add(removed)
+            raise
+
+    # Hooks
+
+    def on_start(self) -> None:
+        """React to the rebuilt view, once, before the first tick."""
+
+    def on_change(self, change: Change) -> None:
+        """React to a change of the space (already applied to the view)."""
+
+    def tick(self) -> None:
+        """Advance simulations and controllers; called every `--tick` seconds. Never blocks long."""
+
+
+def build_parser(cls: type[Agent]) -> argparse.ArgumentParser:
+    """Return the command-line parser of an agent class: common options, then its own."""
+    parser = argparse.ArgumentParser(
+        prog=f"python -m agents.{cls.kind}", description=(cls.__doc__ or "").split("\n")[0]
+    )
+    add_connect(parser)
+    parser.add_argument(
+        "--robot", default="robot1", help="the robot served: IRI, ac:name or name (default robot1)"
+    )
+    parser.add_argument("--name", help="the agent's name (default KIND.ROBOT)")
+    parser.add_argument(
+        "--time-scale",
+        type=float,
+        default=1.0,
+        metavar="X",
+        help="simulated seconds per real second (default 1)",
+    )
+    parser.add_argument(
+        "--tick", type=float, default=0.2, metavar="SECONDS", help="loop period (default 0.2)"
+    )
+    parser.add_argument(
+        "--wait",
+        type=float,
+        default=30.0,
+        metavar="SECONDS",
+        help="how long to wait for the store at start (default 30)",
+    )
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
+    cls.add_arguments(parser)
+    return parser
+
+
+def run_agent(cls: type[Agent], argv: Sequence[str] | None = None) -> int:
+    """Run an agent until SIGINT or SIGTERM; return the process exit code."""
+    args = build_parser(cls).parse_args(argv)
+    logging.basicConfig(
+        stream=sys.stderr,
+        level=[logging.INFO, logging.DEBUG][min(args.verbose, 1)],
+        format="%(asctime)s %(name)s %(levelname)s %(message)s",
+        force=True,
+    )
+    agent = cls(args)
+    previous = {
+        sig: signal.signal(sig, lambda *_: agent.stop()) for sig in (signal.SIGINT, signal.SIGTERM)
+    }
+    try:
+        agent.setup()
+        agent.run()
+        agent.log.info("stopping")
+        return 0
+    except SpaceError as exc:
+        agent.log.error("%s", exc)
+        return 1
+    finally:
+        agent.shutdown()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
