@@ -246,6 +246,14 @@ class TripleSpace:
         reply = self._ask({"op": "snapshot", "template": t.to_wire()}, timeout)
         return self._graph(reply), int(reply.get("seq") or 0)
 
+    def load_prefixes(self, *, timeout: float = 5.0) -> PrefixMap:
+        """Learn the prefixes registered in the space (for templates and display); return them."""
+        reply = self._ask({"op": "prefixes"}, timeout)
+        bindings = reply.get("prefixes") or {}
+        if isinstance(bindings, dict):
+            self.prefixes.update({str(k): str(v) for k, v in bindings.items()})
+        return self.prefixes
+
     def query_sparql(self, text: str, *, timeout: float = 5.0) -> Result:
         """Run a SPARQL SELECT, ASK or CONSTRUCT over the union of both graphs.
 

@@ -57,6 +57,7 @@ class SpaceMirror:
     def __init__(self, history: int = 200) -> None:
         self._asserted = Graph()
         self._inferred = Graph()
+        self._snapshot = Graph()
         self._recent: deque[ChangeRecord] = deque(maxlen=history)
         self._version = 0
         self._changed = threading.Condition()
@@ -92,12 +93,20 @@ class SpaceMirror:
 
     def _on_change(self, change: Change) -> None:
         with self._changed:
+            if self._version == 0:
+                # The snapshot merges both graphs: keep its triples apart until a
+                # later change says which graph they were in by removing them.
+                for triple in change.added:
+                    self._snapshot.add(triple)
+            else:
+                for triple in change.added:
+                    self._asserted.add(triple)
+            for triple in (*change.removed, *change.inferred_removed):
+                self._snapshot.remove(triple)
             for triple in change.removed:
                 self._asserted.remove(triple)
             for triple in change.inferred_removed:
                 self._inferred.remove(triple)
-            for triple in change.added:
-                self._asserted.add(triple)
             for triple in change.inferred_added:
                 self._inferred.add(triple)
             self._recent.append(
@@ -105,10 +114,10 @@ class SpaceMirror:
                     id=change.id,
                     seq=change.seq,
                     agent=change.agent,
-                    timestamp=change.timestamp,
+                    timestamp=change.time,
                     cause=change.cause,
-                    added=tuple(change.added) + tuple(change.inferred_added),
-                    removed=tuple(change.removed) + tuple(change.inferred_removed),
+                    added=(*change.added, *change.inferred_added),
+                    removed=(*change.removed, *change.inferred_removed),
                 )
             )
             self._version += 1
@@ -140,6 +149,8 @@ class SpaceMirror:
             for triple in self._asserted:
                 union.add(triple)
             for triple in self._inferred:
+                union.add(triple)
+            for triple in self._snapshot:
                 union.add(triple)
         return union
 

@@ -77,6 +77,7 @@ class Subscription:
             timestamp=cs.timestamp,
             cause=cs.cause,
             seq=cs.seq,
+            prefixes=cs.prefixes,
             added=lists[0],
             removed=lists[1],
             inferred_added=lists[2],

@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
 from space.zconfig import DEFAULT_ENDPOINT
+
+if TYPE_CHECKING:
+    from space.client import TripleSpace
 
 
 def add_connect(parser: argparse.ArgumentParser) -> None:
@@ -24,3 +28,14 @@ def add_connect(parser: argparse.ArgumentParser) -> None:
         metavar="SECONDS",
         help="how long to wait for the store (default 5)",
     )
+
+
+def open_space(args: argparse.Namespace, agent: str) -> TripleSpace:
+    """Open the space named by `--space` through the routers of `--connect`.
+
+    Raises:
+        SpaceUnavailable: no router reachable.
+    """
+    from space.client import TripleSpace
+
+    return TripleSpace.open(args.connect, space=args.space, agent=agent, config_file=args.config)

@@ -25,6 +25,8 @@ def answer_query(state: SpaceState, request: object) -> tuple[dict, Changeset | 
     if not isinstance(request, dict):
         raise MalformedPayload("a query request is a msgpack map")
     op = request.get("op")
+    if op == "prefixes":
+        return {"seq": state.seq, "prefixes": state.prefixes.as_dict()}, None
     if op == "sparql":
         return _sparql(state, request.get("text")), None
     if op not in ("query", "read", "take", "snapshot"):

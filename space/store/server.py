@@ -224,8 +224,8 @@ class StoreServer:
         return pack({"seq": state.seq, "changes": [payload for _seq, payload in rows]})
 
     def _reject(self, req: _Request, exc: Exception) -> None:
-        kind = "query" if isinstance(exc, QueryError) else "malformed"
-        log.warning("%s %s on %s skipped: %s", kind, req.kind, req.space, exc)
+        what = "rejected" if isinstance(exc, QueryError) else "malformed, skipped:"
+        log.warning("%s %s on space %r: %s", what, req.kind, req.space, exc)
         if req.query is not None:
             req.query.reply_err(str(exc).encode())
 

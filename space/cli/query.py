@@ -1,0 +1,55 @@
+"""`tspace query`: SPARQL or a triple template, printed as a table, JSON or Turtle."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from space.cli.options import add_connect, open_space
+
+ORDER = 40
+FORMATS = ("table", "json", "turtle")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the `query` sub-command."""
+    p = sub.add_parser(
+        "query",
+        help="query the space with SPARQL or a triple template",
+        description="Run a SPARQL SELECT/ASK/CONSTRUCT, or match a template such as "
+        "'?s ac:battery_level ?o' (prefixes: those registered in the space).",
+    )
+    p.add_argument("sparql", nargs="?", metavar="SPARQL", help="SPARQL query text (- for stdin)")
+    p.add_argument("--template", "-t", metavar="TEMPLATE", help="a triple template instead")
+    p.add_argument(
+        "--format", "-f", choices=FORMATS, default="table", help="output (default table)"
+    )
+    p.add_argument(
+        "--graph",
+        choices=("all", "asserted", "inferred"),
+        default="all",
+        help="for templates: which graph (default all)",
+    )
+    add_connect(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Ask the store and print the answer on stdout."""
+    from space.cli.results import print_sparql, print_template
+
+    if (args.sparql is None) == (args.template is None):
+        raise SystemExit("tspace query: give either SPARQL text or --template")
+    with open_space(args, agent="tspace-query") as ts:
+        prefixes = ts.load_prefixes(timeout=args.timeout)
+        if args.template is not None:
+            from space.template import Template
+
+            template = Template.parse(args.template, prefixes)
+            graph = ts.query(template, graph=args.graph, timeout=args.timeout)
+            print_template(template, graph, prefixes, args.format, sys.stdout)
+        else:
+            text = sys.stdin.read() if args.sparql == "-" else args.sparql
+            result = ts.query_sparql(text, timeout=args.timeout)
+            print_sparql(result, prefixes, args.format, sys.stdout)
+    return 0

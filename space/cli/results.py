@@ -1,0 +1,69 @@
+"""Format query answers for `tspace query` and `tspace take`."""
+
+from __future__ import annotations
+
+from typing import TextIO
+
+from rdflib import Graph
+from rdflib.query import Result
+
+from space.display import sparql_json, table
+from space.errors import InputError
+from space.prefixes import PrefixMap
+from space.template import Template
+
+
+def print_graph(graph: Graph, prefixes: PrefixMap, out: TextIO) -> None:
+    """Write a graph as Turtle with the space's prefixes."""
+    for name, ns in prefixes.as_dict().items():
+        graph.bind(name, ns, override=True)
+    out.write(graph.serialize(format="turtle"))
+
+
+def print_template(
+    template: Template, graph: Graph, prefixes: PrefixMap, fmt: str, out: TextIO
+) -> None:
+    """Write the triples matching a template as a table of bindings, JSON results or Turtle."""
+    if fmt == "turtle":
+        print_graph(graph, prefixes, out)
+        return
+    names = list(dict.fromkeys(template.variables()))
+    if names:
+        rows = sorted({tuple(b[n] for n in names) for t in graph if (b := template.match(t))})
+    else:
+        names, rows = ["s", "p", "o"], sorted(graph)
+    if fmt == "json":
+        out.write(sparql_json(names, rows) + "\n")
+    else:
+        out.write(table(names, rows, prefixes) + "\n")
+
+
+def print_sparql(result: Result, prefixes: PrefixMap, fmt: str, out: TextIO) -> None:
+    """Write a SPARQL result as a table, SPARQL JSON results, or Turtle (CONSTRUCT).
+
+    Raises:
+        InputError: Turtle asked for a SELECT/ASK, which has no graph.
+    """
+    if result.type in ("CONSTRUCT", "DESCRIBE"):
+        if fmt == "json":
+            raise InputError("a CONSTRUCT result is a graph: use --format turtle or table")
+        if fmt == "turtle" or result.graph is None:
+            print_graph(result.graph or Graph(), prefixes, out)
+        else:
+            rows = sorted(result.graph)
+            out.write(table(["s", "p", "o"], rows, prefixes) + "\n")
+        return
+    if fmt == "turtle":
+        raise InputError(f"a {result.type} result is not a graph: use --format table or json")
+    if result.type == "ASK":
+        if fmt == "json":
+            out.write(result.serialize(format="json").decode() + "\n")
+        else:
+            out.write(("yes" if result.askAnswer else "no") + "\n")
+        return
+    names = [str(v) for v in result.vars or []]
+    rows = [tuple(row[v] for v in result.vars or []) for row in result]
+    if fmt == "json":
+        out.write(sparql_json(names, rows) + "\n")
+    else:
+        out.write(table(names, rows, prefixes) + "\n")

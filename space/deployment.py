@@ -1,0 +1,242 @@
+"""One run of `tspace up`: the store, the agents, the live view and maybe a scenario.
+
+Everything is driven from the main thread: it starts and restarts the
+processes (the supervisor's PR_SET_PDEATHSIG is tied to this thread), runs the
+scenario's actions and draws the view. The space is watched through a
+`SpaceMirror`, whose updates arrive on the client's dispatcher thread.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from types import FrameType
+
+from rdflib import Graph
+
+from space.client import TripleSpace
+from space.errors import SpaceError
+from space.launch import AgentSpec, Launch
+from space.liveview import Frame, LiveView, robot_line
+from space.mirror import SpaceMirror
+from space.robotview import read_firings, read_robots
+from space.scenario import Scenario, ScenarioRun
+from space.supervisor import ProcessSpec, Supervisor
+
+STORE_STARTUP = 30.0
+TICK = 0.1
+
+
+@dataclass(frozen=True)
+class Options:
+    """What `tspace up` was asked to run (see `space.cli.up`)."""
+
+    launch: Launch
+    listen: list[str]
+    data: Path
+    hmi_port: int | None = None
+    scenario: Scenario | None = None
+    once: bool = False
+    step_timeout: float = 90.0
+
+
+def client_endpoint(listen: str) -> str:
+    """Return the endpoint a local process connects to for a router listening on `listen`."""
+    for wildcard in ("0.0.0.0", "[::]"):
+        listen = listen.replace(f"/{wildcard}:", "/127.0.0.1:")
+    return listen
+
+
+class Deployment:
+    """Run a launch file until stopped.
+
+    Args:
+        options: what to run.
+        view: where to show it.
+    """
+
+    def __init__(self, options: Options, view: LiveView) -> None:
+        launch = options.launch
+        if options.scenario is not None:
+            launch = launch.with_args(options.scenario.agent_args)
+        self.options = options
+        self.launch = launch
+        self.view = view
+        self.connect = client_endpoint(options.listen[0])
+        self.stop_requested = threading.Event()
+        self.supervisor = Supervisor(
+            log_dir=options.data / "logs",
+            on_event=view.event,
+            grace=launch.grace,
+            backoff=launch.backoff,
+        )
+        self.mirror = SpaceMirror()
+        self.scenario: ScenarioRun | None = None
+
+    def agent_argv(self, agent: AgentSpec) -> tuple[str, ...]:
+        """Return the command line of one agent process."""
+        argv = [sys.executable, "-m", agent.module, "--connect", self.connect]
+        argv += ["--space", self.launch.space]
+        if agent.robot:
+            argv += ["--robot", agent.robot]
+        args = list(agent.args)
+        if self.options.hmi_port is not None and agent.module == "agents.hmi":
+            args = _set_option(args, "--http-port", str(self.options.hmi_port))
+        return (*argv, *args)
+
+    def hmi_url(self) -> str | None:
+        """Return the URL of the HMI agent's page, if the launch file has one."""
+        for agent in self.launch.agents:
+            if agent.module == "agents.hmi":
+                port = self.options.hmi_port or agent.option("--http-port") or 8080
+                return f"http://127.0.0.1:{port}/"
+        return None
+
+    def run(self) -> int:
+        """Start everything, show it until stopped, stop everything; return the exit code.
+
+        Must be called from the main thread (it installs SIGINT and SIGTERM handlers).
+        """
+        previous = {
+            sig: signal.signal(sig, self._on_signal) for sig in (signal.SIGINT, signal.SIGTERM)
+        }
+        ts: TripleSpace | None = None
+        try:
+            serve = (sys.executable, "-m", "space.cli", "serve", "--data", str(self.options.data))
+            for endpoint in self.options.listen:
+                serve += ("--listen", endpoint)
+            self.supervisor.start(ProcessSpec("serve", serve, tier=0))
+            ts = self._wait_for_store()
+            if ts is None:
+                return 1
+            self._load(ts)
+            for agent in self.launch.agents:
+                self.supervisor.start(
+                    ProcessSpec(agent.name, self.agent_argv(agent), restart=agent.restart)
+                )
+            url = self.hmi_url()
+            if url:
+                self.view.event(f"HMI at {url}")
+            return self._loop(ts)
+        finally:
+            self.mirror.detach()
+            if ts is not None:
+                ts.close()
+            self.supervisor.stop()
+            self.view.close()
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
+
+    def _on_signal(self, signum: int, frame: FrameType | None) -> None:
+        self.stop_requested.set()
+
+    def _wait_for_store(self) -> TripleSpace | None:
+        """Return a handle once the store answers; None if stopped or it never does."""
+        deadline = time.monotonic() + STORE_STARTUP
+        ts: TripleSpace | None = None
+        while not self.stop_requested.is_set():
+            self.supervisor.poll()
+            try:
+                if ts is None:
+                    ts = TripleSpace.open(self.connect, space=self.launch.space, agent="tspace-up")
+                ts.snapshot((None, None, None), timeout=1.0)
+                return ts
+            except SpaceError as exc:
+                if time.monotonic() > deadline:
+                    log = self.supervisor.log_path("serve")
+                    self.view.event(f"no store after {STORE_STARTUP:.0f} s ({exc}); see {log}")
+                    break
+            self.stop_requested.wait(TICK)
+        if ts is not None:
+            ts.close()
+        return None
+
+    def _load(self, ts: TripleSpace) -> None:
+        """Write the launch file's Turtle files into a space that is still empty."""
+        if not self.launch.load:
+            return
+        held, _ = ts.snapshot((None, None, None), timeout=10.0)
+        if len(held):
+            self.view.event(f"space {self.launch.space} holds {len(held)} triples; not reloading")
+            return
+        for path in self.launch.load:
+            graph = Graph().parse(path, format="turtle")
+            ts.write(graph, timeout=10.0)
+            self.view.event(f"loaded {path.name} ({len(graph)} triples)")
+
+    def _loop(self, ts: TripleSpace) -> int:
+        options = self.options
+        if options.scenario is not None:
+            robot = self.launch.robots[0] if self.launch.robots else "robot1"
+            self.scenario = ScenarioRun(
+                options.scenario, robot, self.view.event, step_timeout=options.step_timeout
+            )
+            run = self.scenario
+            self.mirror.watch(lambda: run.observe(self.mirror))
+        self.mirror.attach(ts)
+        shown, shown_at = -1, 0.0
+        while not self.stop_requested.is_set():
+            self.supervisor.poll()
+            if self.scenario is not None:
+                status = self._tick_scenario(ts, self.scenario)
+                if status is not None:
+                    return status
+            # Reading the robots copies the graph: only when it changed, or to
+            # refresh process states once a second.
+            if self.mirror.version != shown or time.monotonic() - shown_at > 1.0:
+                shown, shown_at = self.mirror.version, time.monotonic()
+                self.view.show(self._frame())
+            self.stop_requested.wait(TICK)
+        if options.once:
+            print("tspace up: stopped before the scenario completed", file=sys.stderr)
+            return 1
+        return 0
+
+    def _tick_scenario(self, ts: TripleSpace, run: ScenarioRun) -> int | None:
+        """Advance the scenario; return an exit code when a `--once` run is over."""
+        try:
+            run.tick(ts, self.mirror)
+        except SpaceError as exc:
+            self.view.event(f"scenario: could not act on the space ({exc}); retrying")
+        if not self.options.once:
+            return None
+        if run.finished:
+            print(f"scenario {run.scenario.name}: completed", flush=True)
+            return 0
+        if run.failure is not None:
+            robots = read_robots(self.mirror.graph())
+            state = "; ".join(robot_line(r) for r in robots) or "no robot in the space"
+            print(
+                f"tspace up: scenario {run.scenario.name} failed: {run.failure} (now: {state})",
+                file=sys.stderr,
+            )
+            return 1
+        return None
+
+    def _frame(self) -> Frame:
+        listen = ", ".join(self.options.listen)
+        header = f"tspace up: space {self.launch.space} on {listen}, data {self.options.data}"
+        url = self.hmi_url()
+        if url:
+            header += f", HMI {url}"
+        return Frame(
+            header=header,
+            robots=read_robots(self.mirror.graph()),
+            firings=read_firings(self.mirror.recent()),
+            processes=self.supervisor.status(),
+            footer=self.scenario.progress if self.scenario else "Ctrl-C stops everything.",
+        )
+
+
+def _set_option(args: list[str], flag: str, value: str) -> list[str]:
+    """Return `args` with `flag`'s value replaced (or the option appended)."""
+    out = list(args)
+    for index, arg in enumerate(out[:-1]):
+        if arg == flag:
+            out[index + 1] = value
+            return out
+    return [*out, flag, value]

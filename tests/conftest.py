@@ -1,0 +1,137 @@
+"""Fixtures: a real Zenoh router with the space store (`tspace serve`) on a free loopback port."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import uuid
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from space import TripleSpace
+from space.errors import SpaceError
+
+REPO = Path(__file__).resolve().parents[1]
+PYTHON = sys.executable
+
+
+def free_port() -> int:
+    """Return a TCP port free on 127.0.0.1 now."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_for(
+    condition: Callable[[], object], timeout: float = 10.0, what: str = "condition"
+) -> object:
+    """Poll `condition` until it returns a truthy value; fail the test after `timeout`."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = condition()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            pytest.fail(f"timed out after {timeout} s waiting for {what}")
+        time.sleep(0.02)
+
+
+def tspace_cmd(*args: str) -> list[str]:
+    """Return the argv that runs `tspace ARGS` with this interpreter."""
+    return [PYTHON, "-m", "space.cli", *args]
+
+
+class Server:
+    """A `tspace serve` child process: router + store, restartable on the same port and data."""
+
+    def __init__(self, data_dir: Path) -> None:
+        self.port = free_port()
+        self.endpoint = f"tcp/127.0.0.1:{self.port}"
+        self.data_dir = data_dir
+        self.proc: subprocess.Popen | None = None
+        self.log = data_dir.parent / f"serve-{self.port}.log"
+
+    def start(self) -> None:
+        """Start the process and wait until a store answers."""
+        with open(self.log, "ab") as log:
+            self.proc = subprocess.Popen(
+                tspace_cmd("serve", "--listen", self.endpoint, "--data", str(self.data_dir)),
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,
+            )
+        wait_for(self._answers, 20, f"tspace serve on {self.endpoint}")
+
+    def _answers(self) -> bool:
+        assert self.proc is not None
+        if self.proc.poll() is not None:
+            pytest.fail(f"tspace serve exited with {self.proc.returncode}: {self.log.read_text()}")
+        try:
+            with TripleSpace.open(self.endpoint, space="ping") as ts:
+                ts.snapshot(timeout=1.0)
+            return True
+        except SpaceError:
+            return False
+
+    def stop(self, sig: int = signal.SIGTERM) -> int:
+        """Stop the process with `sig` and return its exit code."""
+        assert self.proc is not None
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        try:
+            return self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+            return self.proc.wait()
+
+    def logs(self) -> str:
+        """Return what the process printed."""
+        return self.log.read_text(errors="replace")
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    """A router + store for the whole test module."""
+    srv = Server(tmp_path_factory.mktemp("store") / "data")
+    srv.start()
+    try:
+        yield srv
+    finally:
+        srv.stop()
+
+
+@pytest.fixture
+def space_name() -> str:
+    """A space name of its own for each test, so tests sharing a server don't meet."""
+    return f"t{uuid.uuid4().hex[:10]}"
+
+
+@pytest.fixture
+def ts(server: Server, space_name: str) -> Iterator[TripleSpace]:
+    """A client on the test's own space."""
+    with TripleSpace.open(
+        server.endpoint, space=space_name, agent="test", prefixes={"ac": AC_NS}
+    ) as handle:
+        yield handle
+
+
+AC_NS = "https://w3id.org/tspace/selfconfig#"
+
+
+@pytest.fixture
+def run_tspace(server: Server, space_name: str) -> Callable[..., subprocess.CompletedProcess]:
+    """Run a `tspace` sub-command against the test's server and space."""
+
+    def run(
+        *args: str, stdin: str | None = None, timeout: float = 30
+    ) -> subprocess.CompletedProcess:
+        cmd = tspace_cmd(*args, "--connect", server.endpoint, "--space", space_name)
+        return subprocess.run(cmd, input=stdin, capture_output=True, text=True, timeout=timeout)
+
+    return run

@@ -1,0 +1,193 @@
+"""The TSC operations of TripleSpace against a real router + store process."""
+
+import threading
+
+import pytest
+import zenoh
+from rdflib import Graph, Literal, Namespace, URIRef
+from rdflib.namespace import OWL, RDF
+
+from conftest import AC_NS, wait_for
+from space import SpaceUnavailable, TripleSpace
+from space.zconfig import make_config
+
+AC = Namespace(AC_NS)
+ROBOT = [
+    (AC.robot1, RDF.type, AC.Robot),
+    (AC.robot1, AC.has_device, AC.robot1_battery),
+    (AC.robot1_battery, RDF.type, AC.Battery),
+    (AC.robot1_battery, AC.battery_level, Literal("normal")),
+]
+
+
+def test_write_then_query_sees_exactly_what_was_written(ts):
+    cs_id = ts.write(ROBOT)
+    assert isinstance(cs_id, str) and cs_id
+    assert set(ts.query(None)) == set(ROBOT)
+    assert set(ts.query("?r ac:has_device ?d")) == {ROBOT[1]}
+
+
+def test_write_accepts_an_rdflib_graph(ts):
+    g = Graph()
+    for t in ROBOT:
+        g.add(t)
+    ts.write(g)
+    assert len(ts.query(None)) == len(ROBOT)
+
+
+def test_read_returns_one_subject(ts):
+    ts.write(ROBOT)
+    g = ts.read("?s rdf:type ?c")
+    assert {s for s in g.subjects()} == {AC.robot1}
+
+
+def test_functional_property_write_replaces_old_value(ts):
+    ts.write([(AC.battery_level, RDF.type, OWL.FunctionalProperty), *ROBOT])
+    ts.write([(AC.robot1_battery, AC.battery_level, Literal("very low"))])
+    levels = set(ts.query((AC.robot1_battery, AC.battery_level, None)).objects())
+    assert levels == {Literal("very low")}
+
+
+def test_non_functional_property_accumulates(ts):
+    ts.write([(AC.robot1, AC.has_device, AC.a)])
+    ts.write([(AC.robot1, AC.has_device, AC.b)])
+    assert len(ts.query((AC.robot1, AC.has_device, None))) == 2
+
+
+def test_older_hlc_write_of_functional_property_loses(ts):
+    ts.write([(AC.level, RDF.type, OWL.FunctionalProperty)])
+    older = ts.changeset([(AC.x, AC.level, Literal("old"))])
+    newer = ts.changeset([(AC.x, AC.level, Literal("new"))])
+    ts.send(newer)
+    ts.send(older)  # arrives later, but its timestamp is earlier
+    assert set(ts.query((AC.x, AC.level, None)).objects()) == {Literal("new")}
+
+
+def test_transaction_applies_removals_and_additions_atomically(ts):
+    ts.write(ROBOT)
+    seen = []
+    ts.subscribe(None, seen.append)
+    with ts.transaction() as tx:
+        tx.remove(ROBOT[3])
+        tx.add((AC.robot1_battery, AC.battery_level, Literal("low")))
+    assert tx.id
+    wait_for(lambda: seen, what="the transaction's change")
+    assert len(seen) == 1
+    assert seen[0].removed == [ROBOT[3]]
+    assert seen[0].added == [(AC.robot1_battery, AC.battery_level, Literal("low"))]
+
+
+def test_take_removes_what_it_returns(ts):
+    ts.write(ROBOT)
+    taken = ts.take("?d ac:battery_level ?l")
+    assert set(taken) == {ROBOT[3]}
+    assert len(ts.query("?d ac:battery_level ?l")) == 0
+    assert len(ts.query(None)) == 3
+
+
+def test_concurrent_takes_never_return_the_same_triple(server, ts, space_name):
+    ts.write([(AC.job, AC.item, Literal(i)) for i in range(40)])
+    results: list[set] = []
+
+    def taker() -> None:
+        with TripleSpace.open(server.endpoint, space=space_name) as other:
+            got: set = set()
+            for _ in range(20):
+                got |= set(other.take((None, AC.item, None)))
+            results.append(got)
+
+    threads = [threading.Thread(target=taker) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not (results[0] & results[1])
+    assert len(results[0] | results[1]) == 40
+
+
+def test_sparql_select_ask_construct(ts):
+    ts.write(ROBOT)
+    rows = list(ts.query_sparql("SELECT ?d WHERE { ?r ac:has_device ?d }"))
+    assert [r[0] for r in rows] == [AC.robot1_battery]
+    assert ts.query_sparql("ASK { ?b ac:battery_level 'normal' }").askAnswer is True
+    built = ts.query_sparql("CONSTRUCT { ?d ac:of ?r } WHERE { ?r ac:has_device ?d }")
+    assert set(built.graph) == {(AC.robot1_battery, AC.of, AC.robot1)}
+
+
+def test_inferred_graph_is_kept_apart(ts):
+    ts.apply(added=ROBOT[:1], inferred_added=[(AC.robot1, RDF.type, AC.Agent)])
+    assert set(ts.query(None, graph="asserted")) == set(ROBOT[:1])
+    assert set(ts.query(None, graph="inferred")) == {(AC.robot1, RDF.type, AC.Agent)}
+    assert len(ts.query(None)) == 2
+
+
+def test_spaces_do_not_see_each_other(server, ts, space_name):
+    ts.write(ROBOT)
+    with TripleSpace.open(server.endpoint, space=space_name + "x") as other:
+        assert len(other.query(None)) == 0
+
+
+def test_subscribe_gives_matching_triples_with_bindings(ts):
+    seen = []
+    ts.subscribe("?b ac:battery_level ?l", seen.append)
+    ts.write(ROBOT)
+    wait_for(lambda: seen, what="the change")
+    assert seen[0].added == [ROBOT[3]]
+    assert seen[0].bindings == [{"b": AC.robot1_battery, "l": Literal("normal")}]
+    assert seen[0].agent == "test"
+
+
+def test_unsubscribe_stops_callbacks(ts):
+    seen = []
+    sub = ts.subscribe(None, seen.append)
+    ts.write(ROBOT[:1])
+    wait_for(lambda: seen, what="first change")
+    ts.unsubscribe(sub)
+    ts.write(ROBOT[1:2])
+    marker = []
+    ts.subscribe(None, marker.append)
+    ts.write(ROBOT[2:3])
+    wait_for(lambda: marker, what="the marker change")
+    assert len(seen) == 1
+
+
+def test_subscribe_with_snapshot_starts_from_current_state(ts):
+    ts.write(ROBOT)
+    seen = []
+    ts.subscribe("?d ac:battery_level ?l", seen.append, snapshot=True)
+    ts.write([(AC.robot2_battery, AC.battery_level, Literal("full"))])
+    wait_for(lambda: len(seen) >= 2, what="snapshot and change")
+    assert seen[0].added == [ROBOT[3]]
+    assert seen[1].added == [(AC.robot2_battery, AC.battery_level, Literal("full"))]
+
+
+def test_no_store_means_space_unavailable_within_timeout(tmp_path):
+    from conftest import free_port
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with zenoh.open(make_config(mode="router", listen=[endpoint])):
+        with TripleSpace.open(endpoint, space="nostore") as ts:
+            with pytest.raises(SpaceUnavailable, match="no store answered"):
+                ts.write(ROBOT, timeout=0.5)
+            with pytest.raises(SpaceUnavailable):
+                ts.query(None, timeout=0.5)
+
+
+def test_no_router_means_space_unavailable():
+    from conftest import free_port
+
+    with pytest.raises(SpaceUnavailable, match="no Zenoh router reachable"):
+        TripleSpace.open(f"tcp/127.0.0.1:{free_port()}")
+
+
+def test_write_nowait_arrives(ts):
+    seen = []
+    ts.subscribe(None, seen.append)
+    ts.write_nowait([(AC.s, AC.p, Literal(i)) for i in range(3)])
+    wait_for(lambda: seen, what="fire-and-forget change")
+    assert len(ts.query(None)) == 3
+
+
+def test_iri_unaffected_by_unregistered_prefix(ts):
+    ts.write([(URIRef("http://other.org/a/b"), URIRef("http://other.org/p#q"), Literal("x"))])
+    assert len(ts.query("<http://other.org/a/b> ?p ?o")) == 1
