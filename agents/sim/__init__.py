@@ -1,0 +1,1 @@
+"""Simulated robot hardware: pure models the monitor agents drive, testable without a space."""
