@@ -46,6 +46,19 @@ class ChangeRecord:
     added: tuple[Triple, ...]
     removed: tuple[Triple, ...]
 
+    @classmethod
+    def of(cls, change: Change) -> ChangeRecord:
+        """Return the record of a changeset, asserted and inferred triples together."""
+        return cls(
+            id=change.id,
+            seq=change.seq,
+            agent=change.agent,
+            timestamp=change.time,
+            cause=change.cause,
+            added=(*change.added, *change.inferred_added),
+            removed=(*change.removed, *change.inferred_removed),
+        )
+
 
 class SpaceMirror:
     """Keep the asserted and inferred graphs of a space in memory.
@@ -109,17 +122,7 @@ class SpaceMirror:
                 self._inferred.remove(triple)
             for triple in change.inferred_added:
                 self._inferred.add(triple)
-            self._recent.append(
-                ChangeRecord(
-                    id=change.id,
-                    seq=change.seq,
-                    agent=change.agent,
-                    timestamp=change.time,
-                    cause=change.cause,
-                    added=(*change.added, *change.inferred_added),
-                    removed=(*change.removed, *change.inferred_removed),
-                )
-            )
+            self._recent.append(ChangeRecord.of(change))
             self._version += 1
             self._changed.notify_all()
         for watcher in self._watchers:

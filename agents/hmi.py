@@ -1,0 +1,150 @@
+"""The HMI agent: a web page where a person watches the robots and tells them what to do.
+
+The page shows each robot's task, place, battery, speed and device modes and
+the last rule firings with their causes, live (server-sent events). A person
+can request a task (`ac:requested_task`, which the behaviour agent turns into
+the current task) and, in simulation, set the battery level. The HTTP server
+runs on its own threads and never touches the space: the agent's thread
+publishes the state to it after each change and runs its commands on tick.
+
+Run: `python -m agents.hmi --connect tcp/127.0.0.1:7447 --space hospital --http-port 8080`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import threading
+from collections import deque
+from dataclasses import asdict
+
+from rdflib import Literal
+
+from agents.base import Agent, run_agent
+from agents.hmi_web.server import CommandError, Commands, HmiServer, StateBoard
+from agents.view import AC
+from space import Change
+from space.mirror import ChangeRecord
+from space.robotview import read_firings, read_robots
+
+TASK_TYPES = ("AttendingPatient", "Guiding", "GoingToDock", "Idle")
+
+
+class Hmi(Agent):
+    """Serve the HMI web page for every robot of the space."""
+
+    kind = "hmi"
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        super().__init__(args)
+        self.board = StateBoard()
+        self.commands = Commands()
+        self.records: deque[ChangeRecord] = deque(maxlen=200)
+        self.server: HmiServer | None = None
+        self._http: threading.Thread | None = None
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        """Add `--http-host` and `--http-port`."""
+        parser.add_argument(
+            "--http-port", type=int, default=8080, help="port of the web page (default 8080)"
+        )
+        parser.add_argument(
+            "--http-host", default="127.0.0.1", help="address to serve on (default 127.0.0.1)"
+        )
+
+    def setup(self) -> None:
+        """Start serving the page, then connect to the space (the page says when it is up).
+
+        Raises:
+            SystemExit: the port is taken.
+            SpaceUnavailable: see `Agent.setup`.
+        """
+        address = (self.args.http_host, self.args.http_port)
+        try:
+            self.server = HmiServer(address, self.board, self.commands, self.log.debug)
+        except OSError as exc:
+            raise SystemExit(f"hmi: cannot serve on {address[0]}:{address[1]}: {exc}") from exc
+        self._http = threading.Thread(
+            target=self.server.serve_forever, name="hmi-http", daemon=True
+        )
+        self._http.start()
+        self.log.info("HMI at http://%s:%d/", address[0], self.server.port)
+        super().setup()
+
+    def shutdown(self) -> None:
+        """End the event streams, stop the web server, then leave the space."""
+        try:
+            self.board.close()
+            if self.server is not None:
+                if self._http is not None:
+                    self.server.shutdown()
+                self.server.server_close()
+        finally:
+            self.server, self._http = None, None
+            super().shutdown()
+
+    def on_start(self) -> None:
+        """Show the state the space has now."""
+        self._publish()
+
+    def on_change(self, change: Change) -> None:
+        """Remember the change (to explain later firings) and show the new state."""
+        self.records.append(ChangeRecord.of(change))
+        self._publish()
+
+    def tick(self) -> None:
+        """Run the commands the page sent since the last tick."""
+        self.commands.run_pending(self._command)
+
+    def _publish(self) -> None:
+        graph = self.view.graph
+        self.board.publish(
+            {
+                "connected": True,
+                "space": self.args.space,
+                "robots": [asdict(r) for r in read_robots(graph)],
+                "firings": [asdict(f) for f in read_firings(self.records)],
+                "tasks": [t for t in TASK_TYPES if self.view.task_of_type(t) is not None],
+                "levels": self._levels(),
+            }
+        )
+
+    def _levels(self) -> list[str]:
+        """Return the battery levels the integrator defined, emptiest first."""
+        levels = self.view.levels(AC.BatteryLevel, AC.below_percent)
+        return sorted(levels, key=levels.__getitem__)
+
+    def _command(self, name: str, params: dict) -> str | None:
+        """Carry out a command from the page; return the changeset id (None: no change).
+
+        Raises:
+            CommandError: unknown robot, task or level.
+            SpaceError: the store did not take the change.
+        """
+        robot = AC[str(params.get("robot", ""))]
+        if not self.view.objects(robot, AC.has_device):
+            raise CommandError(f"no robot {params.get('robot')!r} in the space")
+        if name == "task":
+            task = self.view.task_of_type(str(params.get("task", "")))
+            if task is None:
+                raise CommandError(f"no task of type {params.get('task')!r} in the space")
+            return self.set_values({(robot, AC.requested_task): task})
+        level = str(params.get("level", ""))
+        thresholds = self.view.levels(AC.BatteryLevel, AC.below_percent)
+        battery = self.view.device(robot, AC.Battery)
+        if level not in thresholds or battery is None:
+            raise CommandError(f"cannot set the battery of {params.get('robot')!r} to {level!r}")
+        # A charge in the middle of the level, so the simulated battery agrees with it.
+        below = max((v for v in thresholds.values() if v < thresholds[level]), default=0.0)
+        percent = min(100, int((below + thresholds[level]) / 2))
+        return self.set_values(
+            {
+                (battery, AC.battery_level): Literal(level),
+                (battery, AC.charge_percent): Literal(percent),
+            }
+        )
+
+
+if __name__ == "__main__":
+    sys.exit(run_agent(Hmi))

@@ -1,0 +1,83 @@
+"""`tspace up`: run a whole deployment (store, reasoner, agents, HMI) from a launch file."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from space.zconfig import DEFAULT_ENDPOINT
+
+ORDER = 10
+DEFAULT_LAUNCH = Path("deploy/hospital.toml")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the `up` sub-command."""
+    p = sub.add_parser(
+        "up",
+        help="run the store and every agent of a launch file, with a live view",
+        description=(
+            "Start `tspace serve` and every agent of the launch file as separate processes, "
+            "restart those that crash, show the robots live, stop everything on Ctrl-C."
+        ),
+    )
+    p.add_argument(
+        "launch",
+        nargs="?",
+        type=Path,
+        default=DEFAULT_LAUNCH,
+        help=f"the launch file (default {DEFAULT_LAUNCH})",
+    )
+    p.add_argument(
+        "--listen",
+        metavar="ENDPOINT",
+        action="append",
+        help=f"endpoint the store's router listens on (repeatable; default {DEFAULT_ENDPOINT})",
+    )
+    p.add_argument(
+        "--data", metavar="DIR", type=Path, help="where the store persists (default: user data dir)"
+    )
+    p.add_argument(
+        "--hmi-port", type=int, metavar="PORT", help="HTTP port of the HMI (overrides the file)"
+    )
+    p.add_argument(
+        "--scenario", metavar="NAME", help="play a scenario (battery: the paper's example)"
+    )
+    p.add_argument(
+        "--once",
+        action="store_true",
+        help="with --scenario: exit 0 when it completes, non-zero naming the step that did not",
+    )
+    p.add_argument(
+        "--step-timeout",
+        type=float,
+        default=90.0,
+        metavar="SECONDS",
+        help="how long each scenario step may take (default 90)",
+    )
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the deployment until Ctrl-C, SIGTERM, or the end of a `--once` scenario."""
+    from space.deployment import Deployment, Options
+    from space.errors import InputError
+    from space.launch import read_launch
+    from space.liveview import LiveView
+    from space.paths import default_data_dir
+    from space.scenario import SCENARIOS
+
+    if args.once and not args.scenario:
+        raise InputError("--once needs --scenario")
+    if args.scenario and args.scenario not in SCENARIOS:
+        raise InputError(f"unknown scenario {args.scenario!r}; known: {', '.join(SCENARIOS)}")
+    options = Options(
+        launch=read_launch(args.launch),
+        listen=args.listen or [DEFAULT_ENDPOINT],
+        data=args.data or default_data_dir(),
+        hmi_port=args.hmi_port,
+        scenario=SCENARIOS[args.scenario] if args.scenario else None,
+        once=args.once,
+        step_timeout=args.step_timeout,
+    )
+    return Deployment(options, LiveView.for_terminal()).run()
