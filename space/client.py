@@ -19,7 +19,7 @@ from rdflib.query import Result
 
 from space import keys
 from space.changeset import Changeset, pack
-from space.errors import QueryError
+from space.errors import QueryError, TemplateError
 from space.prefixes import PrefixMap
 from space.request import ask_store
 from space.session import open_session
@@ -204,7 +204,13 @@ class TripleSpace:
         return ask_store(self.session, self._key("query"), pack(request), timeout, what="query")
 
     def _template(self, template: TemplateLike) -> Template:
-        return Template.of(template, self.prefixes)
+        try:
+            return Template.of(template, self.prefixes)
+        except TemplateError:
+            if not isinstance(template, str):
+                raise
+            self.load_prefixes()  # the prefix may be registered in the space
+            return Template.of(template, self.prefixes)
 
     def _graph(self, reply: dict) -> Graph:
         graph = Graph()

@@ -25,8 +25,9 @@ def open_server(
     durable: bool = False,
     config_file: str | None = None,
     connect: list[str] | None = None,
-) -> Iterator[StoreServer]:
-    """Open a router-mode Zenoh session with the store on it; close both on exit."""
+    store: bool = True,
+) -> Iterator[StoreServer | None]:
+    """Open a router-mode Zenoh session with the store on it (unless `store=False`); close both."""
     from space.paths import default_data_dir
 
     conf = make_config(mode="router", listen=listen, connect=connect, config_file=config_file)
@@ -34,9 +35,10 @@ def open_server(
     try:
         listener = session.info.declare_transport_events_listener(_log_transport)
         server = StoreServer(session, data_dir or default_data_dir(), durable=durable)
-        server.start()
+        if store:
+            server.start()
         try:
-            yield server
+            yield server if store else None
         finally:
             server.close()
             listener.undeclare()
@@ -58,7 +60,10 @@ def serve_forever(**kwargs: object) -> None:
     }
     try:
         with open_server(**kwargs) as server:  # type: ignore[arg-type]
-            log.info("serving spaces from %s", server.data_dir)
+            if server is None:
+                log.info("routing only (no store)")
+            else:
+                log.info("serving spaces from %s", server.data_dir)
             stop.wait()
             log.info("stopping")
     finally:

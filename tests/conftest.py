@@ -50,7 +50,8 @@ def tspace_cmd(*args: str) -> list[str]:
 class Server:
     """A `tspace serve` child process: router + store, restartable on the same port and data."""
 
-    def __init__(self, data_dir: Path) -> None:
+    def __init__(self, data_dir: Path, *extra: str) -> None:
+        self.extra = extra
         self.port = free_port()
         self.endpoint = f"tcp/127.0.0.1:{self.port}"
         self.data_dir = data_dir
@@ -61,12 +62,18 @@ class Server:
         """Start the process and wait until a store answers."""
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(
-                tspace_cmd("serve", "--listen", self.endpoint, "--data", str(self.data_dir)),
+                tspace_cmd(
+                    "serve", "--listen", self.endpoint, "--data", str(self.data_dir), *self.extra
+                ),
                 stdout=log,
                 stderr=subprocess.STDOUT,
                 start_new_session=True,
             )
         wait_for(self._answers, 20, f"tspace serve on {self.endpoint}")
+
+    def reachable(self) -> bool:
+        """Return True when a store answers through this process's router."""
+        return self._answers()
 
     def _answers(self) -> bool:
         assert self.proc is not None

@@ -33,6 +33,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--fsync", action="store_true", help="fsync every commit (survives power loss, slower)"
     )
+    p.add_argument(
+        "--no-store", action="store_true", help="route only: another process keeps the space"
+    )
     p.set_defaults(func=run)
 
 
@@ -49,5 +52,6 @@ def run(args: argparse.Namespace) -> int:
         durable=args.fsync,
         config_file=args.config,
         connect=args.connect,
+        store=not args.no_store,
     )
     return 0

@@ -97,11 +97,12 @@ def answer_key_get(state: SpaceState, query: zenoh.Query, root: str) -> None:
     selector = zenoh.KeyExpr(str(query.key_expr))
     chunks = str(query.key_expr).split("/")
     graph = chunks[2]
-    positions = chunks[3:6] if len(chunks) == 6 else []
-    pattern = [
-        None if any(c in chunk for c in "*$") else keys.chunk_term(chunk, state.prefixes)
-        for chunk in positions
-    ] or [None, None, None]
+    pattern: list = [None, None, None]
+    for i, chunk in enumerate(chunks[3:6]):
+        if chunk == "**":
+            break
+        if not any(c in chunk for c in "*$"):
+            pattern[i] = keys.chunk_term(chunk, state.prefixes)
     for t in state.match(Template(*pattern), graph):
         key = keys.triple_key(state.name, graph, t, state.prefixes, root)
         if selector.intersects(key):

@@ -83,7 +83,7 @@ class StoreServer:
         log.info("store ready: %d space(s) from %s", len(self._spaces), self._db.path)
 
     def close(self) -> None:
-        """Stop serving, finish queued work and close the database."""
+        """Stop serving, finish queued work and close the database (no-op if not started)."""
         for entity in reversed(self._entities):
             entity.undeclare()
         self._entities = []
