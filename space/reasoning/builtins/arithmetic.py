@@ -1,0 +1,126 @@
+"""Compute with numbers: `sum difference product quotient min max addOne`.
+
+Each binds its last argument to the result, or checks it when already bound.
+Integers stay integers (except for `quotient`); anything else is computed as a float.
+"""
+
+from __future__ import annotations
+
+import operator
+from collections.abc import Callable
+from decimal import Decimal
+from typing import ClassVar
+
+from rdflib import Literal
+
+from space.reasoning.builtins.base import Args, Builtin, Context
+
+Number = int | float
+
+
+def _number(ctx: Context, i: int | None) -> Number | None:
+    value = ctx.terms.keys[i] if i is not None else None
+    if isinstance(value, bool) or not isinstance(value, int | float | Decimal):
+        return None
+    return value if isinstance(value, int) else float(value)
+
+
+def _bind(ctx: Context, args: Args, result: Number) -> Args | None:
+    """Bind the last argument to `result`, or check it when it is already bound."""
+    out = args[-1]
+    if out is None:
+        return (*args[:-1], ctx.terms.id(Literal(result)))
+    value = _number(ctx, out)
+    return args if value is not None and value == result else None
+
+
+class _Binary(Builtin):
+    """Bind the third argument to a function of the first two."""
+
+    arity = (3, 3)
+    function: ClassVar[Callable[[Number, Number], Number]]
+
+    def outputs(self, nargs: int) -> frozenset[int]:
+        return frozenset({2})
+
+    def run(self, ctx: Context, args: Args) -> Args | None:
+        a, b = _number(ctx, args[0]), _number(ctx, args[1])
+        if a is None or b is None:
+            return None
+        return _bind(ctx, args, type(self).function(a, b))
+
+
+class Sum(_Binary):
+    """Bind the third argument to the sum of the first two."""
+
+    name = "sum"
+    function = operator.add
+
+
+class Difference(_Binary):
+    """Bind the third argument to the first minus the second."""
+
+    name = "difference"
+    function = operator.sub
+
+
+class Product(_Binary):
+    """Bind the third argument to the product of the first two."""
+
+    name = "product"
+    function = operator.mul
+
+
+class Min(_Binary):
+    """Bind the third argument to the smaller of the first two."""
+
+    name = "min"
+    function = min
+
+
+class Max(_Binary):
+    """Bind the third argument to the larger of the first two."""
+
+    name = "max"
+    function = max
+
+
+class Quotient(Builtin):
+    """Bind the third argument to the first divided by the second (never by zero)."""
+
+    name = "quotient"
+    arity = (3, 3)
+
+    def outputs(self, nargs: int) -> frozenset[int]:
+        return frozenset({2})
+
+    def run(self, ctx: Context, args: Args) -> Args | None:
+        a, b = _number(ctx, args[0]), _number(ctx, args[1])
+        if a is None or not b:
+            return None
+        return _bind(ctx, args, a / b)
+
+
+class AddOne(Builtin):
+    """Bind the second argument to the first plus one."""
+
+    name = "addOne"
+    arity = (2, 2)
+
+    def outputs(self, nargs: int) -> frozenset[int]:
+        return frozenset({1})
+
+    def run(self, ctx: Context, args: Args) -> Args | None:
+        a = _number(ctx, args[0])
+        return None if a is None else _bind(ctx, args, a + 1)
+
+
+BUILTINS: tuple[Builtin, ...] = (
+    Sum(),
+    Difference(),
+    Product(),
+    Quotient(),
+    Min(),
+    Max(),
+    AddOne(),
+)

@@ -1,0 +1,28 @@
+"""Errors of the rule engine, each named for what went wrong."""
+
+from __future__ import annotations
+
+from space.errors import SpaceError
+
+
+class RuleError(SpaceError):
+    """A rule is well formed but cannot be used (unknown builtin, arity, unbound head variable).
+
+    The message starts with `file:line:column:` and names the rule when it has a name.
+    """
+
+
+class RuleSyntaxError(RuleError):
+    """A rules file does not follow the Jena rule syntax."""
+
+
+class RuleLoopError(RuleError):
+    """Production rules kept firing past the engine's limit; the update was undone.
+
+    Attributes:
+        rules: the names of the rules that fired most in the runaway cycle, most first.
+    """
+
+    def __init__(self, message: str, rules: tuple[str, ...]) -> None:
+        super().__init__(message)
+        self.rules = rules

@@ -1,0 +1,75 @@
+"""Encode terms as small integers, so joins compare and hash ints instead of rdflib objects.
+
+Each term also gets a value key, computed once, that makes `1`, `1.0` and
+`"1"^^xsd:int` equal for the builtins that compare by value.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import date, datetime, time
+from decimal import Decimal
+
+from rdflib import Literal
+from rdflib.term import Node
+
+
+@dataclass(frozen=True)
+class FunctorValue:
+    """A functor built by a rule head: a name and encoded arguments, visible to rules only."""
+
+    name: str
+    args: tuple[int, ...]
+
+
+Value = Node | FunctorValue
+
+
+def value_key(term: Value) -> object:
+    """Return what `equal` compares: the number or time of a typed literal, else the term."""
+    if not isinstance(term, Literal):
+        return term
+    value = term.value
+    if isinstance(value, bool):
+        return ("boolean", value)
+    if isinstance(value, int | float | Decimal | datetime | date | time):
+        return value
+    return ("literal", str(term), term.language, term.datatype)
+
+
+class TermTable:
+    """Give every term an integer id, both ways, and its value key.
+
+    Ids are never reused, so an id held by a derivation stays meaningful.
+    """
+
+    def __init__(self) -> None:
+        self._ids: dict[Value, int] = {}
+        self._terms: list[Value] = []
+        self.keys: list[object] = []
+
+    def __len__(self) -> int:
+        return len(self._terms)
+
+    def id(self, term: Value) -> int:
+        """Return the id of a term, giving it one if it has none."""
+        found = self._ids.get(term)
+        if found is not None:
+            return found
+        new = len(self._terms)
+        self._ids[term] = new
+        self._terms.append(term)
+        self.keys.append(value_key(term))
+        return new
+
+    def find(self, term: Value) -> int | None:
+        """Return the id of a term, or None if it was never seen."""
+        return self._ids.get(term)
+
+    def term(self, i: int) -> Value:
+        """Return the term of an id."""
+        return self._terms[i]
+
+    def same_value(self, a: int, b: int) -> bool:
+        """Tell whether two terms are equal by value (`1` equals `1.0`)."""
+        return a == b or self.keys[a] == self.keys[b]

@@ -1,0 +1,99 @@
+"""Hold encoded triples with the three indexes joins need: SPO, POS and OSP.
+
+The index dicts are created once and never replaced, because compiled join
+code holds direct references to them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+Id = int
+T = tuple[int, int, int]
+Index = dict[int, dict[int, set[int]]]
+
+
+def _put(index: Index, a: int, b: int, c: int) -> None:
+    inner = index.get(a)
+    if inner is None:
+        index[a] = {b: {c}}
+        return
+    leaf = inner.get(b)
+    if leaf is None:
+        inner[b] = {c}
+    else:
+        leaf.add(c)
+
+
+def _drop(index: Index, a: int, b: int, c: int) -> None:
+    inner = index[a]
+    leaf = inner[b]
+    leaf.discard(c)
+    if not leaf:
+        del inner[b]
+        if not inner:
+            del index[a]
+
+
+class TripleStore:
+    """Keep a set of encoded triples, indexed by subject, predicate and object."""
+
+    def __init__(self) -> None:
+        self.triples: set[T] = set()
+        self.spo: Index = {}
+        self.pos: Index = {}
+        self.osp: Index = {}
+
+    def __len__(self) -> int:
+        return len(self.triples)
+
+    def __contains__(self, triple: object) -> bool:
+        return triple in self.triples
+
+    def __iter__(self) -> Iterator[T]:
+        return iter(self.triples)
+
+    def add(self, t: T) -> bool:
+        """Add a triple; return False if it was already there."""
+        if t in self.triples:
+            return False
+        self.triples.add(t)
+        s, p, o = t
+        _put(self.spo, s, p, o)
+        _put(self.pos, p, o, s)
+        _put(self.osp, o, s, p)
+        return True
+
+    def remove(self, t: T) -> bool:
+        """Remove a triple; return False if it was not there."""
+        if t not in self.triples:
+            return False
+        self.triples.discard(t)
+        s, p, o = t
+        _drop(self.spo, s, p, o)
+        _drop(self.pos, p, o, s)
+        _drop(self.osp, o, s, p)
+        return True
+
+    def exists(self, s: Id | None, p: Id | None, o: Id | None) -> bool:
+        """Tell whether some triple matches; None matches anything."""
+        return next(self.match(s, p, o), None) is not None
+
+    def match(self, s: Id | None, p: Id | None, o: Id | None) -> Iterator[T]:
+        """Yield the triples that match; None matches anything."""
+        if s is not None:
+            by_p = self.spo.get(s, {})
+            for p2, objects in by_p.items() if p is None else [(p, by_p.get(p, ()))]:
+                for o2 in objects if o is None else ([o] if o in objects else []):
+                    yield (s, p2, o2)
+        elif p is not None:
+            by_o = self.pos.get(p, {})
+            for o2, subjects in by_o.items() if o is None else [(o, by_o.get(o, ()))]:
+                for s2 in subjects:
+                    yield (s2, p, o2)
+        elif o is not None:
+            for s2, predicates in self.osp.get(o, {}).items():
+                for p2 in predicates:
+                    yield (s2, p2, o)
+        else:
+            yield from self.triples
