@@ -41,3 +41,12 @@ def test_nearest_place():
     assert nearest(places, 1, 1) == "dock"
     assert nearest(places, 4, 0) == "hall"
     assert nearest({}, 0, 0) is None
+
+
+def test_stopping_without_a_target_is_not_an_abort():
+    base = Base()
+    base.go_to(10, 0)
+    base.step(1)
+    base.stop()
+    assert base.status == "idle"
+    assert base.speed == 0.0

@@ -44,6 +44,12 @@ class Base:
         self.target = (x, y)
         self.status = "navigating"
 
+    def stop(self) -> None:
+        """Stop where it is because nowhere is to be reached any more (not a failure)."""
+        if self.status == "navigating":
+            self.status = "idle"
+        self.target = None
+
     def abort(self) -> None:
         """Stop where it is; the trip counts as aborted."""
         if self.status == "navigating":

@@ -1,0 +1,140 @@
+"""The hardware monitor: simulated drivers of one robot's devices, seen through the space.
+
+It publishes what the devices sense (battery level and charge, faults, what the
+laser sees) and obeys the running modes the rules command (`ac:running_mode`),
+reporting the mode each device is actually in (`ac:actual_mode`). Values are
+written only when they change, as levels the ontology defines. On restart it
+takes the battery charge and device modes back from the space.
+"""
+
+from __future__ import annotations
+
+import argparse
+import random
+import sys
+
+from rdflib import Literal, URIRef
+from rdflib.term import Node
+
+from agents.base import Agent, run_agent
+from agents.sim.battery import DEFAULT_LEVELS, Battery, level_of
+from agents.sim.devices import FAULTS, MODES, Driver, drain, obstacles_seen
+from agents.view import AC
+
+
+class HwMonitor(Agent):
+    """Simulate and monitor a robot's devices: levels, faults and running modes."""
+
+    kind = "hw_monitor"
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        super().__init__(args)
+        self.drivers: dict[URIRef, Driver] = {}
+        self.battery = Battery(args.charge)
+        self._injected: dict[URIRef, str] = {}
+        self._refused: dict[tuple[URIRef, str], str] = {}
+        self._last = 0.0
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        """Add the simulation options."""
+        parser.add_argument(
+            "--charge",
+            type=float,
+            default=80.0,
+            metavar="PERCENT",
+            help="battery charge at first start, when the space has none (default 80)",
+        )
+        parser.add_argument(
+            "--fault-rate",
+            type=float,
+            default=0.0,
+            metavar="PER_HOUR",
+            help="random wheel motor errors per simulated hour (default 0)",
+        )
+        parser.add_argument("--seed", type=int, help="random seed of the fault simulation")
+
+    def on_start(self) -> None:
+        """Create a driver per device, in the state the space last reported."""
+        rng = random.Random(self.args.seed)
+        for device in self.view.objects(self.robot, AC.has_device):
+            if not isinstance(device, URIRef):
+                continue
+            mode = self.view.text(device, AC.actual_mode) or "active"
+            fault = self.view.text(device, AC.fault) or "none"
+            rate = self.args.fault_rate if self.view.has_type(device, AC.WheelMotor) else 0.0
+            self.drivers[device] = Driver(
+                mode if mode in MODES else "active",
+                fault if fault in FAULTS else "none",
+                fault_rate=rate,
+                rng=rng,
+            )
+            self._injected[device] = self.view.text(device, AC.simulate_fault) or "none"
+        battery = self.view.device(self.robot, AC.Battery)
+        charge = self.view.number(battery, AC.charge_percent)
+        if charge is not None:
+            self.battery.percent = charge
+        self._last = self.clock.now()
+        self.log.info("%d devices, battery at %.0f %%", len(self.drivers), self.battery.percent)
+        self.set_values(self._readings())
+
+    def tick(self) -> None:
+        """Obey commands, advance the drivers and the battery, publish what changed."""
+        now = self.clock.now()
+        dt, self._last = now - self._last, now
+        for device, driver in self.drivers.items():
+            self._obey(device, driver, now)
+            driver.step(now, dt)
+        task = self.view.value(self.robot, AC.current_task)
+        self.battery.charging = self.view.task_type(task) == "Charging"
+        moving = self.view.text(self.robot, AC.navigation_status) == "navigating"
+        self.battery.step(dt, drain(self.drivers.values()), moving)
+        self.set_values(self._readings())
+
+    def _obey(self, device: URIRef, driver: Driver, now: float) -> None:
+        """Pass the commanded mode and any fault injection from the space to the driver."""
+        mode = self.view.text(device, AC.running_mode)
+        if mode is not None and not self._refuse(device, "mode", mode, MODES):
+            driver.command(mode, now)
+        fault = self.view.text(device, AC.simulate_fault) or "none"
+        if fault != self._injected.get(device) and not self._refuse(device, "fault", fault, FAULTS):
+            self._injected[device] = fault
+            driver.inject(fault)
+            self.log.info("%s: simulated fault %r", device, fault)
+
+    def _refuse(self, device: URIRef, what: str, value: str, allowed: tuple[str, ...]) -> bool:
+        """Return True (and warn once per value) if a command from the space is invalid."""
+        if value in allowed:
+            self._refused.pop((device, what), None)
+            return False
+        if self._refused.get((device, what)) != value:
+            self._refused[(device, what)] = value
+            self.log.warning("%s: ignoring unknown %s %r", device, what, value)
+        return True
+
+    def _readings(self) -> dict[tuple[Node, Node], Node | None]:
+        """Return every state this monitor reports, as the space should hold it."""
+        values: dict[tuple[Node, Node], Node | None] = {}
+        for device, driver in self.drivers.items():
+            values[(device, AC.actual_mode)] = Literal(driver.mode)
+            values[(device, AC.fault)] = Literal(driver.fault)
+        battery = self.view.device(self.robot, AC.Battery)
+        if battery is not None:
+            levels = self.view.levels(AC.BatteryLevel, AC.below_percent) or DEFAULT_LEVELS
+            values[(battery, AC.battery_level)] = Literal(level_of(self.battery.percent, levels))
+            values[(battery, AC.charge_percent)] = Literal(self.battery.reported_percent())
+        for laser in self.view.devices(self.robot, AC.LaserScanner):
+            place = self.view.value(self.robot, AC.location)
+            seen = obstacles_seen(self.view.text(place, AC.crowd_level), self.drivers[laser].mode)
+            if seen is not None:
+                values[(laser, AC.obstacles)] = Literal(seen)
+        return values
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the hardware monitor (see `--help`)."""
+    return run_agent(HwMonitor, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,69 @@
+"""Agent processes for process-level tests: start, kill -9, restart, never leave orphans."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+from rdflib import Graph
+
+REPO = Path(__file__).resolve().parents[1]
+ONTOLOGY = REPO / "ontology" / "selfconfig.ttl"
+HOSPITAL = REPO / "ontology" / "robots" / "hospital.ttl"
+
+
+def knowledge() -> Graph:
+    """Return the ontology and the hospital robot, as `tspace up` loads them."""
+    graph = Graph()
+    graph.parse(ONTOLOGY)
+    graph.parse(HOSPITAL)
+    return graph
+
+
+class AgentProcess:
+    """One `python -m agents.NAME` child process with its log file."""
+
+    def __init__(self, module: str, endpoint: str, space: str, log_dir: Path, *args: str) -> None:
+        self.argv = [
+            sys.executable,
+            "-m",
+            f"agents.{module}",
+            "--connect",
+            endpoint,
+            "--space",
+            space,
+            *args,
+        ]
+        self.log = log_dir / f"{module}-{space}.log"
+        self.proc: subprocess.Popen | None = None
+
+    def start(self) -> AgentProcess:
+        """Start (or restart) the process."""
+        with open(self.log, "ab") as log:
+            self.proc = subprocess.Popen(
+                self.argv, cwd=REPO, stdout=log, stderr=subprocess.STDOUT, start_new_session=True
+            )
+        return self
+
+    def alive(self) -> bool:
+        """Return True while the process runs."""
+        return self.proc is not None and self.proc.poll() is None
+
+    def stop(self, sig: int = signal.SIGTERM, timeout: float = 10) -> int:
+        """Send `sig`, wait for the exit and return the exit code (SIGKILL after `timeout`)."""
+        assert self.proc is not None
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        try:
+            return self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
+            raise
+
+    def logs(self) -> str:
+        """Return what the process printed."""
+        return self.log.read_text(errors="replace") if self.log.exists() else ""
