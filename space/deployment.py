@@ -118,6 +118,9 @@ class Deployment:
                 self.supervisor.start(
                     ProcessSpec(agent.name, self.agent_argv(agent), restart=agent.restart)
                 )
+            self.view.event(
+                f"started {len(self.launch.agents)} agents; logs in {self.options.data / 'logs'}"
+            )
             url = self.hmi_url()
             if url:
                 self.view.event(f"HMI at {url}")

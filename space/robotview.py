@@ -50,6 +50,7 @@ class RobotState:
     name: str
     task: str | None
     task_type: str | None
+    requested: str | None
     location: str | None
     at_dock: bool
     battery: str | None
@@ -129,6 +130,7 @@ def read_robots(graph: Graph) -> list[RobotState]:
         battery = next((d for d in devices if kinds[d] == "Battery"), None)
         base = next((d for d in devices if kinds[d] == "MobileBase"), None)
         task = graph.value(robot, AC.current_task)
+        requested = graph.value(robot, AC.requested_task)
         place = graph.value(robot, AC.location)
         charge = graph.value(battery, AC.charge_percent) if battery else None
         states.append(
@@ -136,6 +138,7 @@ def read_robots(graph: Graph) -> list[RobotState]:
                 name=local(robot) or str(robot),
                 task=local(task),
                 task_type=local(graph.value(task, AC.type)) if task is not None else None,
+                requested=local(graph.value(requested, AC.type)) if requested is not None else None,
                 location=local(place),
                 at_dock=place is not None
                 and (place == graph.value(robot, AC.dock) or (place, RDF.type, AC.Dock) in graph),

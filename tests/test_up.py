@@ -1,0 +1,116 @@
+"""`tspace up` runs a launch file's processes, restarts crashed ones and leaves nothing behind."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import urllib.request
+from pathlib import Path
+
+import pytest
+from uprun import Up, alive
+
+from conftest import REPO, tspace_cmd, wait_for
+
+LAUNCH = """
+space = "ward"
+robots = ["robot1"]
+load = ["{repo}/ontology/selfconfig.ttl", "{repo}/ontology/robots/hospital.ttl"]
+
+[supervisor]
+grace = 3.0
+backoff_initial = 0.5
+
+[[agent]]
+name = "hw_monitor"
+per_robot = true
+
+[[agent]]
+name = "hmi"
+"""
+
+
+@pytest.fixture
+def launch(tmp_path: Path) -> Path:
+    path = tmp_path / "ward.toml"
+    path.write_text(LAUNCH.format(repo=REPO))
+    return path
+
+
+def hmi_state(port: int) -> dict:
+    with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/state", timeout=2) as reply:
+        return json.load(reply)
+
+
+def hmi_connected(port: int) -> bool:
+    try:
+        return hmi_state(port)["connected"]
+    except OSError:
+        return False
+
+
+def test_up_shows_the_robot_and_sigint_stops_every_process(tmp_path, launch):
+    with Up(tmp_path, launch) as up:
+        up.wait_started()
+        wait_for(lambda: up.stdout_has("robot1: task Idle, at dock1"), 20, "the robot in the log")
+        wait_for(lambda: hmi_connected(up.hmi_port), 20, "the HMI page")
+        assert up.stderr_has(f"HMI at http://127.0.0.1:{up.hmi_port}/")
+        processes = up.track()
+        assert len(processes) == 3, up.logs()  # serve, hw_monitor, hmi
+        up.proc.send_signal(signal.SIGINT)
+        assert up.proc.wait(timeout=15) == 0, up.logs()
+        assert [p for p in processes if alive(p)] == []
+
+
+def test_a_killed_agent_is_restarted_and_the_supervisor_says_so(tmp_path, launch):
+    with Up(tmp_path, launch) as up:
+        up.wait_started()
+        first = wait_for(lambda: up.pid_of("agents.hw_monitor"), 10, "hw_monitor")
+        wait_for(lambda: hmi_connected(up.hmi_port), 20, "the HMI page")
+        subprocess.run(["kill", "-9", str(first)], check=True)
+        wait_for(
+            lambda: up.stderr_has("hw_monitor: crashed (killed by SIGKILL); restarting in 0.5 s"),
+            10,
+            "the crash report",
+        )
+        wait_for(lambda: up.stderr_has("hw_monitor: restarted (pid "), 10, "the restart report")
+        second = wait_for(lambda: up.pid_of("agents.hw_monitor"), 10, "the new hw_monitor")
+        assert second != first
+        # The new monitor connects and goes on reporting the robot's devices.
+        log = up.data / "logs" / "hw_monitor.log"
+        wait_for(lambda: log.read_text().count("connected to space 'ward'") == 2, 20, "reconnect")
+
+
+def test_sigterm_stops_every_process(tmp_path, launch):
+    with Up(tmp_path, launch) as up:
+        up.wait_started()
+        processes = up.track()
+        up.proc.send_signal(signal.SIGTERM)
+        assert up.proc.wait(timeout=15) == 0, up.logs()
+        assert [p for p in processes if alive(p)] == []
+
+
+def test_a_killed_up_takes_its_processes_with_it(tmp_path, launch):
+    with Up(tmp_path, launch) as up:
+        up.wait_started()
+        processes = up.track()
+        assert len(processes) == 3
+        up.proc.kill()
+        up.proc.wait()
+        wait_for(lambda: not any(alive(p) for p in processes), 10, "the orphans to die")
+
+
+def test_a_broken_launch_file_is_reported_in_one_line(tmp_path):
+    broken = tmp_path / "broken.toml"
+    broken.write_text('space = "x"\n[[agent]]\nmodule = "agents.hmi"\n')
+    result = subprocess.run(
+        tspace_cmd("up", str(broken), "--data", str(tmp_path)),
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == [
+        "tspace up: every [[agent]] needs a name: {'module': 'agents.hmi'}"
+    ]
