@@ -1,0 +1,27 @@
+"""The reasoning engine: Jena rules and OWL RL, kept up to date incrementally."""
+
+from space.reasoning.builtins import Builtin, Registry, default_registry
+from space.reasoning.delta import Change, Delta, Firing, Origin, Why
+from space.reasoning.engine import RuleEngine, read_graph
+from space.reasoning.errors import RuleError, RuleLoopError, RuleSyntaxError
+from space.reasoning.parser import load_rules, parse_rules
+from space.reasoning.rules import Rule
+
+__all__ = [
+    "Builtin",
+    "Change",
+    "Delta",
+    "Firing",
+    "Origin",
+    "Registry",
+    "Rule",
+    "RuleEngine",
+    "RuleError",
+    "RuleLoopError",
+    "RuleSyntaxError",
+    "Why",
+    "default_registry",
+    "load_rules",
+    "parse_rules",
+    "read_graph",
+]

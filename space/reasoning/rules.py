@@ -8,7 +8,7 @@ compiles them without caring where they came from.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Union
+from typing import TYPE_CHECKING
 
 from rdflib.term import Node
 
@@ -49,7 +49,7 @@ class Functor:
         return f"{self.name}({', '.join(show(a) for a in self.args)})"
 
 
-Term = Union[Node, Var, Functor]
+Term = Node | Var | Functor
 
 
 @dataclass(frozen=True)
@@ -87,7 +87,7 @@ class Call:
         return f"{self.name}({', '.join(show(a) for a in self.args)})"
 
 
-Item = Union[Pattern, Call]
+Item = Pattern | Call
 
 
 @dataclass(frozen=True)

@@ -47,6 +47,7 @@ class TermTable:
         self._ids: dict[Value, int] = {}
         self._terms: list[Value] = []
         self.keys: list[object] = []
+        self.functors: set[int] = set()
 
     def __len__(self) -> int:
         return len(self._terms)
@@ -60,6 +61,8 @@ class TermTable:
         self._ids[term] = new
         self._terms.append(term)
         self.keys.append(value_key(term))
+        if isinstance(term, FunctorValue):
+            self.functors.add(new)
         return new
 
     def find(self, term: Value) -> int | None:

@@ -1,0 +1,72 @@
+"""Track what one update touches, to report its net change and to undo it."""
+
+from __future__ import annotations
+
+from space.reasoning.delta import Change, Delta, Firing, Origin
+from space.reasoning.terms import TermTable
+from space.reasoning.triples import T, TripleStore
+from space.terms import Triple
+
+JournalEntry = tuple[bool, T, tuple[int, tuple[T, ...]] | None]
+
+
+class ChangeLog:
+    """Remember, for each triple an update touches, whether it was present and asserted before.
+
+    The journal lists every assertion (True) and retraction (False) in order, with
+    the production rule that made an assertion, so an update can be reversed.
+    """
+
+    def __init__(self, terms: TermTable, store: TripleStore, asserted: set[T]) -> None:
+        self._terms = terms
+        self._store = store
+        self._asserted = asserted
+        self._before: dict[T, tuple[bool, bool]] = {}
+        self._expected: dict[T, bool] = {}
+        self.journal: list[JournalEntry] = []
+
+    def begin(self, added: list[T], removed: list[T]) -> None:
+        """Start an update in which the caller asserts `added` and retracts `removed`."""
+        self._before = {}
+        self.journal = []
+        self._expected = {t: False for t in removed}
+        self._expected.update((t, True) for t in added)
+
+    def touch(self, t: T) -> None:
+        """Note the state of a triple before the update first changes it."""
+        if t not in self._before:
+            self._before[t] = (t in self._store.triples, t in self._asserted)
+
+    def delta(self, firings: tuple[Firing, ...]) -> Delta:
+        """Return the net change since `begin`."""
+        added: list[Change] = []
+        removed: list[Change] = []
+        by_rules: tuple[list[Triple], list[Triple]] = ([], [])
+        inferred: tuple[list[Triple], list[Triple]] = ([], [])
+        functors, triples, asserted = self._terms.functors, self._store.triples, self._asserted
+        for t, (was_present, was_asserted) in self._before.items():
+            if t[2] in functors:
+                continue
+            is_present, is_asserted = t in triples, t in asserted
+            if is_present != was_present:
+                now = is_asserted if is_present else was_asserted
+                change = Change(self._decode(t), Origin.ASSERTED if now else Origin.INFERRED)
+                (added if is_present else removed).append(change)
+            if is_asserted != self._expected.get(t, was_asserted):
+                by_rules[0 if is_asserted else 1].append(self._decode(t))
+            was_inferred = was_present and not was_asserted
+            if (is_present and not is_asserted) != was_inferred:
+                inferred[1 if was_inferred else 0].append(self._decode(t))
+        return Delta(
+            added=tuple(added),
+            removed=tuple(removed),
+            asserted_added=tuple(by_rules[0]),
+            asserted_removed=tuple(by_rules[1]),
+            inferred_added=tuple(inferred[0]),
+            inferred_removed=tuple(inferred[1]),
+            firings=firings,
+        )
+
+    def _decode(self, t: T) -> Triple:
+        term = self._terms.term
+        return (term(t[0]), term(t[1]), term(t[2]))  # type: ignore[return-value]

@@ -1,0 +1,150 @@
+"""Compile rules for one engine: join functions, head builders, and the index that finds them.
+
+The index maps a triple to the joins it can start: by constant predicate and
+object, by constant predicate, or (for patterns with a variable predicate) a
+bucket every triple visits. A triple whose predicate no rule mentions costs a
+few dictionary misses.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+
+from rdflib.term import Node
+
+from space.reasoning.builtins import Args, Builtin, Effect
+from space.reasoning.joins import Heads, JoinCompiler, Trigger
+from space.reasoning.rules import Call, Functor, Pattern, Rule, Var, variables
+
+ArgsFn = Callable[[tuple], Args]
+
+
+@dataclass(frozen=True)
+class CompiledRule:
+    """A rule ready to run: what it asserts, deletes and does once its body matched.
+
+    `drops` and `removes` index the premises (the matched triples, in body order),
+    not the body items. A rule is `production` when it drops, removes or uses
+    `noValue` (any builtin that is not monotonic).
+    """
+
+    rule: Rule
+    order: int
+    production: bool
+    heads: Heads
+    drops: tuple[int, ...]
+    removes: tuple[int, ...]
+    actions: tuple[tuple[Builtin, ArgsFn], ...]
+    guards: tuple[tuple[Builtin, ArgsFn], ...]
+
+    @property
+    def label(self) -> str:
+        """Return the rule's name (or where it was written)."""
+        return self.rule.label
+
+
+Entry = tuple[CompiledRule, Trigger]
+
+
+class RuleIndex:
+    """Find the joins a triple can start, when it is added or (for noValue) removed."""
+
+    def __init__(self) -> None:
+        self._by_po: dict[tuple[int, int], list[Entry]] = {}
+        self._by_p: dict[int, list[Entry]] = {}
+        self._anywhere: list[Entry] = []
+        self._removal_by_p: dict[int, list[Entry]] = {}
+        self._removal_anywhere: list[Entry] = []
+
+    def on_added(self, p: int, o: int) -> Iterator[Entry]:
+        """Yield the joins a new triple with predicate `p` and object `o` starts."""
+        found = self._by_po.get((p, o))
+        if found:
+            yield from found
+        found = self._by_p.get(p)
+        if found:
+            yield from found
+        yield from self._anywhere
+
+    def on_removed(self, p: int) -> Iterator[Entry]:
+        """Yield the joins whose noValue may accept since a triple with predicate `p` went."""
+        yield from self._removal_by_p.get(p, ())
+        yield from self._removal_anywhere
+
+    def add(self, compiler: JoinCompiler, rule: Rule, order: int) -> CompiledRule:
+        """Compile a (checked) rule and index its joins."""
+        slots = _slots(rule)
+        premise_of = {}
+        for index, item in enumerate(rule.body):
+            if isinstance(item, Pattern):
+                premise_of[index] = len(premise_of)
+        calls = [i for i in rule.head if isinstance(i, Call)]
+        compiled = CompiledRule(
+            rule=rule,
+            order=order,
+            production=any(not c.builtin.monotonic for c in _calls(rule)),
+            heads=compiler.heads(rule, slots),
+            drops=_targets(calls, Effect.DROP, premise_of),
+            removes=_targets(calls, Effect.REMOVE, premise_of),
+            actions=tuple(
+                (c.builtin, compiler.args(c, slots))
+                for c in calls
+                if c.builtin.effect is Effect.NONE
+            ),
+            guards=tuple(
+                (c.builtin, compiler.args(c, slots))
+                for c in rule.body
+                if isinstance(c, Call) and not c.builtin.monotonic
+            ),
+        )
+        for index, item in enumerate(rule.body):
+            if isinstance(item, Pattern):
+                entry = (compiled, compiler.trigger(rule, slots, index))
+                self._file(entry, item.p, item.o, compiler)
+            elif item.name == "noValue" and compiled.production:
+                entry = (compiled, compiler.trigger(rule, slots, index))
+                predicate = item.args[1]
+                if isinstance(predicate, Var | Functor):
+                    self._removal_anywhere.append(entry)
+                else:
+                    key = compiler.constant(predicate)
+                    self._removal_by_p.setdefault(key, []).append(entry)
+        return compiled
+
+    def _file(self, entry: Entry, p: object, o: object, compiler: JoinCompiler) -> None:
+        if isinstance(p, Var | Functor):
+            self._anywhere.append(entry)
+        elif isinstance(o, Var | Functor):
+            self._by_p.setdefault(compiler.constant(p), []).append(entry)  # type: ignore[arg-type]
+        else:
+            key = (compiler.constant(p), compiler.constant(o))  # type: ignore[arg-type]
+            self._by_po.setdefault(key, []).append(entry)
+
+
+def _calls(rule: Rule) -> Iterator[Call]:
+    for item in (*rule.body, *rule.head):
+        if isinstance(item, Call):
+            yield item
+
+
+def _slots(rule: Rule) -> dict[Var, int]:
+    slots: dict[Var, int] = {}
+    for item in (*rule.body, *rule.head):
+        terms: Sequence[object] = item.terms if isinstance(item, Pattern) else item.args
+        for term in terms:
+            for var in variables(term):  # type: ignore[arg-type]
+                slots.setdefault(var, len(slots))
+    return slots
+
+
+def _targets(calls: list[Call], effect: Effect, premise_of: dict[int, int]) -> tuple[int, ...]:
+    targets: list[int] = []
+    for call in calls:
+        if call.builtin.effect is effect:
+            targets.extend(premise_of[int(_value(a))] for a in call.args)
+    return tuple(targets)
+
+
+def _value(term: object) -> object:
+    return term.toPython() if isinstance(term, Node) else term  # type: ignore[attr-defined]

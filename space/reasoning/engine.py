@@ -1,0 +1,345 @@
+"""Run Jena rules and OWL RL over a changing set of triples, at the cost of what changes.
+
+Two layers share one state. The monotonic layer (OWL RL compiled for the
+ontology, plus rules without drop/remove/noValue) keeps the closure of the
+asserted triples, adding by delta joins and deleting by DRed over recorded
+derivations. The production layer (rules with drop/remove/noValue) fires once
+per new match, one firing at a time, in rule order then most recent first,
+each firing's changes fully applied (closure included) before the next.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from pathlib import Path
+
+from rdflib import BNode, Graph, Literal, URIRef
+from rdflib.term import Node
+
+from space.errors import InputError
+from space.reasoning.agenda import Agenda
+from space.reasoning.builtins import Context, Registry, default_registry
+from space.reasoning.changes import ChangeLog
+from space.reasoning.checks import check_rule
+from space.reasoning.compile import CompiledRule, RuleIndex
+from space.reasoning.delta import Delta, Firing, Origin, Why
+from space.reasoning.errors import RuleError
+from space.reasoning.joins import JoinCompiler, Match
+from space.reasoning.owl import owl_rules
+from space.reasoning.parser import load_rules
+from space.reasoning.rules import Rule
+from space.reasoning.support import Support
+from space.reasoning.terms import FunctorValue, TermTable
+from space.reasoning.triples import T, TripleStore
+from space.terms import Triple
+
+
+class RuleEngine:
+    """Keep a set of triples closed under rules; update it incrementally.
+
+    Args:
+        rules: parsed rules, in file order (production rules fire in this order).
+        ontology: the TBox: compiled to OWL RL rules (when `owl`) and loaded with the data.
+        registry: the builtins rules may use (the default set when None).
+        owl: whether to add the OWL RL rules for the ontology.
+        max_firings: production firings one update may take before it is a loop.
+        printer: where the `print` builtin writes.
+
+    Not thread-safe: one owner calls `load`, then `apply`, from one thread.
+    """
+
+    def __init__(
+        self,
+        rules: Sequence[Rule] = (),
+        ontology: Graph | Iterable[Triple] | None = None,
+        *,
+        registry: Registry | None = None,
+        owl: bool = True,
+        max_firings: int = 10_000,
+        printer: Callable[[str], None] = print,
+    ) -> None:
+        self.registry = registry or default_registry()
+        self.rules = tuple(rules)
+        for rule in self.rules:
+            check_rule(rule)
+        tbox = ontology if isinstance(ontology, Graph) else _graph(ontology or ())
+        self.terms = TermTable()
+        self._store = TripleStore()
+        self._ctx = Context(self.terms, self._store, printer)
+        compiler = JoinCompiler(self.terms, self._store, self._ctx)
+        index = RuleIndex()
+        extra = owl_rules(tbox) if owl else []
+        self._compiled = [index.add(compiler, r, i) for i, r in enumerate([*self.rules, *extra])]
+        self._index = index
+        self._ontology = [self._encode(t) for t in tbox]
+        self._asserted: set[T] = set()
+        self._asserted_by: dict[T, tuple[int, tuple[T, ...]]] = {}
+        self._support = Support()
+        self._agenda = Agenda(max_firings)
+        self._log = ChangeLog(self.terms, self._store, self._asserted)
+        self._firings: list[Firing] = []
+        self._production = True
+        self._loaded = False
+        self._graph: Graph | None = None
+
+    @classmethod
+    def from_files(
+        cls,
+        rules: Iterable[str | Path] = (),
+        ontology: Iterable[str | Path] = (),
+        **options: object,
+    ) -> RuleEngine:
+        """Build an engine from rules files and ontology files (Turtle, RDF/XML, N-Triples...).
+
+        Raises:
+            RuleSyntaxError, RuleError: a rules file is invalid.
+            InputError: an ontology file cannot be read or parsed.
+        """
+        registry = options.pop("registry", None) or default_registry()
+        parsed = load_rules(rules, registry)  # type: ignore[arg-type]
+        return cls(parsed, read_graph(ontology), registry=registry, **options)  # type: ignore[arg-type]
+
+    @property
+    def graph(self) -> Graph:
+        """Return the current state (asserted and inferred) as an rdflib Graph; do not modify it."""
+        if self._graph is None:
+            self._graph = _graph(self.triples())
+        return self._graph
+
+    def triples(self, origin: Origin | None = None) -> Iterator[Triple]:
+        """Yield the current triples, or only the asserted or only the inferred ones."""
+        functors = self.terms.functors
+        for t in self._store:
+            if t[2] in functors:
+                continue
+            if origin is None or (t in self._asserted) == (origin is Origin.ASSERTED):
+                yield self._decode(t)
+
+    def __contains__(self, triple: object) -> bool:
+        ids = tuple(self.terms.find(x) for x in triple) if isinstance(triple, tuple) else ()
+        return len(ids) == 3 and ids in self._store
+
+    def load(self, triples: Graph | Iterable[Triple] = ()) -> Delta:
+        """Assert the initial state (with the ontology) and run the rules to a fixpoint.
+
+        Raises:
+            RuleError: the engine was loaded already (use `apply`).
+            RuleLoopError: production rules did not settle; nothing was loaded.
+        """
+        if self._loaded:
+            raise RuleError("load() starts a new engine; this one is loaded, use apply()")
+        return self.apply(added=triples)
+
+    def apply(self, added: Iterable[Triple] = (), removed: Iterable[Triple] = ()) -> Delta:
+        """Retract `removed`, assert `added`, run the rules; return the net change.
+
+        Removing a triple that is only inferred changes nothing: it holds as long
+        as its support does. The first call on an engine not loaded loads the ontology.
+
+        Raises:
+            InputError: a triple is not three rdflib terms (IRI or blank node subject,
+                IRI predicate).
+            RuleLoopError: production rules kept firing; the state is as before the call.
+        """
+        plus = [self._encode(t) for t in added]
+        minus = [self._encode(t) for t in removed]
+        if not self._loaded:
+            plus = self._ontology + plus
+        self._log.begin(plus, minus)
+        self._firings = []
+        self._agenda.reset()
+        try:
+            self._unassert(minus, notify=True)
+            self._assert(plus, None)
+            self._run_agenda()
+        except Exception:
+            self._undo()
+            raise
+        self._loaded = True
+        self._graph = None
+        return self._log.delta(tuple(self._firings))
+
+    def why(self, triple: Triple) -> Why | None:
+        """Return why a triple holds: asserted, or a rule and its premises; None if it does not."""
+        t = tuple(self.terms.find(x) for x in triple)
+        if t not in self._store:
+            return None
+        if t in self._asserted:
+            by = self._asserted_by.get(t)  # type: ignore[arg-type]
+            return Why(True) if by is None else Why(True, *self._explain(by))
+        found = self._support.first(t)  # type: ignore[arg-type]
+        return Why(False, *self._explain(found)) if found else None
+
+    def _explain(self, derivation: tuple[int, tuple[T, ...]]) -> tuple[str, tuple[Triple, ...]]:
+        rule, premises = derivation
+        return self._compiled[rule].label, tuple(self._decode(p) for p in premises)
+
+    def _encode(self, triple: Triple) -> T:
+        if not isinstance(triple, tuple | list) or len(triple) != 3:
+            raise InputError(f"a triple is three terms, got {triple!r}")
+        s, p, o = triple
+        if (
+            not isinstance(s, URIRef | BNode)
+            or not isinstance(p, URIRef)
+            or not isinstance(o, Node)
+        ):
+            raise InputError(f"not an RDF triple of rdflib terms: {triple!r}")
+        term = self.terms.id
+        return (term(s), term(p), term(o))
+
+    def _decode(self, t: T) -> Triple:
+        term = self.terms.term
+        return (term(t[0]), term(t[1]), term(t[2]))  # type: ignore[return-value]
+
+    def _assert(self, triples: Iterable[T], by: tuple[int, tuple[T, ...]] | None) -> None:
+        """Assert triples and propagate through the monotonic rules."""
+        queue = []
+        for t in triples:
+            if t in self._asserted:
+                continue
+            self._log.touch(t)
+            self._asserted.add(t)
+            self._log.journal.append((True, t, by))
+            if by is not None:
+                self._asserted_by[t] = by
+            if self._store.add(t):
+                queue.append(t)
+        self._propagate(queue)
+
+    def _propagate(self, queue: list[T]) -> None:
+        """Run the joins each new triple starts until nothing new is derived."""
+        store, triples, support, ctx = self._store, self._store.triples, self._support, self._ctx
+        touch, on_added, agenda = self._log.touch, self._index.on_added, self._agenda
+        out: list[Match] = []
+        position = 0
+        while position < len(queue):
+            s, p, o = queue[position]
+            position += 1
+            for compiled, trigger in on_added(p, o):
+                trigger(s, p, o, out)
+                if not out:
+                    continue
+                if compiled.production:
+                    if self._production:
+                        for match in out:
+                            agenda.push(compiled, match)
+                else:
+                    for premises, bindings in out:
+                        for head in compiled.heads(bindings):
+                            support.record(head, compiled.order, premises)
+                            if head not in triples:
+                                touch(head)
+                                store.add(head)
+                                queue.append(head)
+                        for builtin, args in compiled.actions:
+                            builtin.act(ctx, args(bindings))
+                out.clear()
+
+    def _unassert(self, triples: Iterable[T], *, notify: bool) -> None:
+        """Retract asserted triples and what they alone supported.
+
+        With `notify` (remove, a caller's removal) the retraction may activate
+        rules whose noValue now holds; without it (drop) it is silent.
+        """
+        doomed = []
+        for t in triples:
+            if t not in self._asserted:
+                continue
+            self._log.touch(t)
+            self._asserted.discard(t)
+            self._log.journal.append((False, t, self._asserted_by.pop(t, None)))
+            doomed.append(t)
+        if not doomed:
+            return
+        gone = self._support.retract(doomed, self._store, self._asserted, self._log.touch)
+        if not (notify and self._production):
+            return
+        out: list[Match] = []
+        for s, p, o in gone:
+            for compiled, trigger in self._index.on_removed(p):
+                trigger(s, p, o, out)
+                for match in out:
+                    self._agenda.push(compiled, match)
+                out.clear()
+
+    def _run_agenda(self) -> None:
+        """Fire activations one at a time while their match still holds."""
+        triples, ctx = self._store.triples, self._ctx
+        while self._agenda:
+            activation = self._agenda.pop()
+            compiled, (premises, bindings) = activation.rule, activation.match
+            if not all(t in triples for t in premises):
+                continue
+            if any(b.run(ctx, args(bindings)) is None for b, args in compiled.guards):
+                continue
+            self._agenda.count(compiled)
+            self._fire(compiled, premises, bindings)
+
+    def _fire(self, compiled: CompiledRule, premises: tuple[T, ...], bindings: tuple) -> None:
+        heads = compiled.heads(bindings)
+        dropped = [premises[i] for i in compiled.drops]
+        removed = [premises[i] for i in compiled.removes]
+        for builtin, args in compiled.actions:
+            builtin.act(self._ctx, args(bindings))
+        self._unassert(dropped, notify=False)
+        self._unassert(removed, notify=True)
+        self._assert(heads, (compiled.order, premises))
+        decode = self._decode
+        self._firings.append(
+            Firing(
+                rule=compiled.label,
+                triggers=tuple(decode(t) for t in premises),
+                asserted=tuple(decode(t) for t in heads if t[2] not in self.terms.functors),
+                retracted=tuple(decode(t) for t in (*dropped, *removed)),
+            )
+        )
+
+    def _undo(self) -> None:
+        """Reverse this update's assertions and retractions, with production rules off."""
+        journal = self._log.journal[:]
+        self._production = False
+        try:
+            for was_added, t, by in reversed(journal):
+                if was_added:
+                    self._unassert([t], notify=False)
+                else:
+                    self._assert([t], by)
+        finally:
+            self._production = True
+            self._agenda.reset()
+            self._graph = None
+
+
+def read_graph(paths: Iterable[str | Path]) -> Graph:
+    """Read RDF files (format from the suffix, Turtle by default) into one graph.
+
+    Raises:
+        InputError: a file is missing or malformed.
+    """
+    graph = Graph()
+    for path in paths:
+        try:
+            graph.parse(str(path), format=_format(Path(path)))
+        except (OSError, SyntaxError, ValueError) as exc:
+            raise InputError(f"cannot read {path}: {exc}") from exc
+    return graph
+
+
+def _format(path: Path) -> str:
+    suffix = path.suffix.lower()
+    return {
+        ".nt": "nt",
+        ".rdf": "xml",
+        ".owl": "xml",
+        ".xml": "xml",
+        ".n3": "n3",
+        ".jsonld": "json-ld",
+    }.get(suffix, "turtle")
+
+
+def _graph(triples: Iterable[Triple]) -> Graph:
+    graph = Graph()
+    for triple in triples:
+        if not isinstance(triple[2], FunctorValue) and not isinstance(triple[0], Literal):
+            graph.add(triple)
+    return graph
