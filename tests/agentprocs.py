@@ -67,3 +67,31 @@ class AgentProcess:
     def logs(self) -> str:
         """Return what the process printed."""
         return self.log.read_text(errors="replace") if self.log.exists() else ""
+
+
+class Launcher:
+    """Starts agent processes for one test and kills whatever is left at the end."""
+
+    def __init__(self, endpoint: str, space: str, log_dir: Path) -> None:
+        self.endpoint, self.space, self.log_dir = endpoint, space, log_dir
+        self.procs: list[AgentProcess] = []
+
+    def start(self, module: str, *args: str) -> AgentProcess:
+        """Start `python -m agents.MODULE` on the test's space."""
+        proc = AgentProcess(module, self.endpoint, self.space, self.log_dir, *args).start()
+        self.procs.append(proc)
+        return proc
+
+    def close(self) -> None:
+        """Kill every process still running."""
+        for proc in self.procs:
+            if proc.alive():
+                assert proc.proc is not None
+                os.killpg(proc.proc.pid, signal.SIGKILL)
+                proc.proc.wait()
+
+
+def value(ts: object, subject: object, predicate: object) -> object:
+    """Return the one object of (subject, predicate) in the space, None if absent."""
+    found = sorted(ts.query((subject, predicate, None)).objects())  # type: ignore[attr-defined]
+    return found[0] if len(found) == 1 else None

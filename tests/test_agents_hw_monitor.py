@@ -1,0 +1,116 @@
+"""The hardware monitor as a process: levels, commands, faults, restarts, malformed input."""
+
+import signal
+
+import pytest
+from agentprocs import Launcher, knowledge, value
+from rdflib import Literal, Namespace
+
+from conftest import AC_NS, wait_for
+from space.presence import alive_agents
+
+AC = Namespace(AC_NS)
+
+
+@pytest.fixture
+def launch(server, space_name, tmp_path):
+    launcher = Launcher(server.endpoint, space_name, tmp_path)
+    try:
+        yield launcher
+    finally:
+        launcher.close()
+
+
+@pytest.fixture
+def robot(ts):
+    ts.write(knowledge())
+    return ts
+
+
+def charge(ts):
+    found = value(ts, AC.robot1_battery, AC.charge_percent)
+    return None if found is None else int(found)
+
+
+def test_battery_level_falls_as_the_battery_drains(robot, launch):
+    launch.start("hw_monitor", "--time-scale", "300", "--charge", "30")
+    wait_for(lambda: value(robot, AC.robot1_battery, AC.battery_level) == Literal("low"), 15)
+    wait_for(lambda: value(robot, AC.robot1_battery, AC.battery_level) == Literal("very low"), 15)
+    assert charge(robot) < 10
+
+
+def test_battery_charges_while_the_task_is_charging(robot, launch):
+    robot.apply(
+        [(AC.robot1, AC.current_task, AC.task_charging)],
+        [(AC.robot1, AC.current_task, AC.task_idle)],
+    )
+    launch.start("hw_monitor", "--time-scale", "300", "--charge", "50")
+    wait_for(lambda: value(robot, AC.robot1_battery, AC.battery_level) == Literal("full"), 15)
+
+
+def test_devices_obey_running_modes_and_report_them(robot, launch):
+    launch.start("hw_monitor")
+    wait_for(lambda: value(robot, AC.robot1_screen, AC.actual_mode) == Literal("active"))
+    robot.write([(AC.robot1_screen, AC.running_mode, Literal("stand-by"))])
+    wait_for(lambda: value(robot, AC.robot1_screen, AC.actual_mode) == Literal("stand-by"))
+    assert value(robot, AC.robot1_speakers, AC.actual_mode) == Literal("active")
+
+
+def test_a_simulated_motor_fault_is_reported_and_cleared(robot, launch):
+    launch.start("hw_monitor")
+    wait_for(lambda: value(robot, AC.robot1_wheels, AC.actual_mode) == Literal("active"))
+    robot.write([(AC.robot1_wheels, AC.simulate_fault, Literal("error"))])
+    wait_for(lambda: value(robot, AC.robot1_wheels, AC.fault) == Literal("error"))
+    robot.write([(AC.robot1_wheels, AC.simulate_fault, Literal("none"))])
+    wait_for(lambda: value(robot, AC.robot1_wheels, AC.fault) == Literal("none"))
+
+
+def test_the_laser_reports_crowds_where_the_robot_is(robot, launch):
+    launch.start("hw_monitor")
+    wait_for(lambda: value(robot, AC.robot1_laser, AC.obstacles) == Literal("clear"))
+    robot.write([(AC.robot1, AC.location, AC.hall)])
+    wait_for(lambda: value(robot, AC.robot1_laser, AC.obstacles) == Literal("surrounded"))
+
+
+def test_malformed_commands_are_skipped_and_the_agent_keeps_working(robot, launch):
+    agent = launch.start("hw_monitor")
+    wait_for(lambda: value(robot, AC.robot1_screen, AC.actual_mode) == Literal("active"))
+    robot.write(
+        [
+            (AC.robot1_screen, AC.running_mode, Literal("asleep")),
+            (AC.robot1_wheels, AC.simulate_fault, Literal(42)),
+            (AC.robot1_battery, AC.charge_percent, Literal("lots")),
+        ]
+    )
+    robot.write([(AC.robot1_speakers, AC.running_mode, Literal("stand-by"))])
+    wait_for(lambda: value(robot, AC.robot1_speakers, AC.actual_mode) == Literal("stand-by"))
+    assert agent.alive()
+    assert "ignoring unknown mode 'asleep'" in agent.logs()
+
+
+def test_kill_9_then_restart_rebuilds_the_battery_from_the_space(robot, launch):
+    agent = launch.start("hw_monitor", "--time-scale", "100")
+    wait_for(lambda: (charge(robot) or 100) <= 70, 20)
+    robot.write([(AC.robot1_microphone, AC.running_mode, Literal("stand-by"))])
+    wait_for(lambda: value(robot, AC.robot1_microphone, AC.actual_mode) == Literal("stand-by"))
+    name = "hw_monitor.robot1"
+    wait_for(lambda: name in alive_agents(robot.session, robot.space))
+    agent.stop(signal.SIGKILL)
+    wait_for(lambda: name not in alive_agents(robot.session, robot.space), 15)
+    before = charge(robot)
+
+    agent.start()
+    wait_for(lambda: name in alive_agents(robot.session, robot.space))
+    # Rebuilt from the space: the charge it had, not the robot file's 80 % nor --charge.
+    wait_for(lambda: f"battery at {before} %" in agent.logs())
+    assert charge(robot) <= before
+    assert value(robot, AC.robot1_microphone, AC.actual_mode) == Literal("stand-by")
+
+
+def test_sigterm_stops_cleanly_and_withdraws_presence(robot, launch):
+    agent = launch.start("hw_monitor")
+    name = "hw_monitor.robot1"
+    wait_for(lambda: name in alive_agents(robot.session, robot.space))
+    assert agent.stop(signal.SIGTERM) == 0
+    wait_for(lambda: name not in alive_agents(robot.session, robot.space))
+    assert "stopping" in agent.logs()

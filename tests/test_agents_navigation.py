@@ -1,0 +1,117 @@
+"""The nav monitor and the behaviour machine as processes: trips, speed, power cycle, restarts."""
+
+import signal
+
+import pytest
+from agentprocs import AgentProcess, Launcher, knowledge, value
+from rdflib import Literal, Namespace
+
+from conftest import AC_NS, tspace_cmd, wait_for
+
+AC = Namespace(AC_NS)
+
+
+@pytest.fixture
+def launch(server, space_name, tmp_path):
+    launcher = Launcher(server.endpoint, space_name, tmp_path)
+    try:
+        yield launcher
+    finally:
+        launcher.close()
+
+
+@pytest.fixture
+def robot(ts):
+    ts.write(knowledge())
+    return ts
+
+
+def state(ts, predicate, subject=AC.robot1):
+    return value(ts, subject, predicate)
+
+
+def test_a_user_request_takes_the_robot_to_the_patient(robot, launch):
+    launch.start("nav_monitor", "--time-scale", "20")
+    launch.start("behavior", "--time-scale", "20")
+    robot.write(
+        [
+            (AC.robot1, AC.attended_person, AC.patient_ane),
+            (AC.robot1, AC.requested_task, AC.task_attending_patient),
+        ]
+    )
+    wait_for(lambda: state(robot, AC.current_task) == AC.task_attending_patient)
+    wait_for(lambda: state(robot, AC.location) == AC.room_101)
+    wait_for(lambda: state(robot, AC.navigation_status) == Literal("reached"))
+    assert state(robot, AC.interacting_with) == AC.patient_ane
+    assert state(robot, AC.requested_task) is None
+    assert (state(robot, AC.position_x), state(robot, AC.position_y)) == (
+        Literal("2.0", datatype=state(robot, AC.position_x).datatype),
+        Literal("12.0", datatype=state(robot, AC.position_y).datatype),
+    )
+
+
+def test_speed_limit_and_disabled_navigation_act_on_the_base(robot, launch):
+    launch.start("nav_monitor", "--time-scale", "2")
+    robot.write([(AC.robot1, AC.target_place, AC.therapy_room)])
+    wait_for(lambda: state(robot, AC.navigation_status) == Literal("navigating"))
+    wait_for(lambda: float(state(robot, AC.actual_speed, AC.robot1_base) or 0) == 0.7)
+    robot.write([(AC.robot1_base, AC.motion_speed, Literal("low"))])
+    wait_for(lambda: float(state(robot, AC.actual_speed, AC.robot1_base) or 0) == 0.3)
+
+    robot.write([(AC.robot1_navigation, AC.skill_status, Literal("disabled"))])
+    wait_for(lambda: state(robot, AC.navigation_status) == Literal("aborted"))
+    assert float(state(robot, AC.actual_speed, AC.robot1_base)) == 0.0
+    stopped_at = state(robot, AC.position_x)
+    robot.write([(AC.robot1_base, AC.motion_speed, Literal("high"))])
+    wait_for(lambda: state(robot, AC.navigation_status) == Literal("aborted"))
+    assert state(robot, AC.position_x) == stopped_at
+
+    robot.write([(AC.robot1_navigation, AC.skill_status, Literal("enabled"))])
+    wait_for(lambda: state(robot, AC.location) == AC.therapy_room, 20)
+    wait_for(lambda: state(robot, AC.navigation_status) == Literal("reached"))
+
+
+def test_going_to_dock_docks_charges_and_resumes_the_patient(robot, launch):
+    for agent in ("hw_monitor", "nav_monitor", "behavior"):
+        launch.start(agent, "--time-scale", "50")
+    robot.write(
+        [
+            (AC.robot1, AC.attended_person, AC.patient_ane),
+            (AC.robot1, AC.requested_task, AC.task_attending_patient),
+        ]
+    )
+    wait_for(lambda: state(robot, AC.location) == AC.room_101)
+    # What the paper's rule does on a very low battery.
+    robot.write([(AC.robot1, AC.current_task, AC.task_going_to_dock)])
+    wait_for(lambda: state(robot, AC.current_task) == AC.task_charging, 15)
+    assert state(robot, AC.location) == AC.dock1
+    assert state(robot, AC.resume_task) == AC.task_attending_patient
+    wait_for(lambda: state(robot, AC.current_task) == AC.task_attending_patient, 20)
+    wait_for(lambda: state(robot, AC.location) == AC.room_101)
+    assert state(robot, AC.battery_level, AC.robot1_battery) == Literal("full")
+
+
+def test_kill_9_behavior_keeps_counting_the_task_time(robot, launch):
+    behavior = launch.start("behavior", "--time-scale", "20")
+    robot.write([(AC.robot1, AC.requested_task, AC.task_guiding)])
+    wait_for(lambda: state(robot, AC.current_task) == AC.task_guiding)
+    wait_for(lambda: float(state(robot, AC.task_elapsed) or 0) >= 40, 15)
+    behavior.stop(signal.SIGKILL)
+    before = float(state(robot, AC.task_elapsed))
+    behavior.start()
+    wait_for(lambda: "view rebuilt" in behavior.logs().split("connected to space")[-1])
+    wait_for(lambda: float(state(robot, AC.task_elapsed)) > before)
+    assert state(robot, AC.current_task) == AC.task_guiding
+
+
+def test_tspace_agent_runs_an_agent(robot, server, space_name, tmp_path):
+    launcher = Launcher(server.endpoint, space_name, tmp_path)
+    proc = AgentProcess("nav_monitor", server.endpoint, space_name, tmp_path)
+    proc.argv = tspace_cmd("agent", "nav_monitor", *proc.argv[3:])
+    launcher.procs.append(proc.start())
+    try:
+        robot.write([(AC.robot1, AC.target_place, AC.hall)])
+        wait_for(lambda: state(robot, AC.navigation_status) == Literal("navigating"))
+        assert proc.stop(signal.SIGINT) == 0
+    finally:
+        launcher.close()
