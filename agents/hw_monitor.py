@@ -85,11 +85,24 @@ class HwMonitor(Agent):
         for device, driver in self.drivers.items():
             self._obey(device, driver, now)
             driver.step(now, dt)
-        task = self.view.value(self.robot, AC.current_task)
-        self.battery.charging = self.view.task_type(task) == "Charging"
         moving = self.view.text(self.robot, AC.navigation_status) == "navigating"
+        self.battery.charging = self._on_charger(moving)
         self.battery.step(dt, drain(self.drivers.values()), moving)
         self.set_values(self._readings())
+
+    def _on_charger(self, moving: bool) -> bool:
+        """Return True while charging: the task is Charging, or any power task at the dock.
+
+        Charging at the dock whatever the power task matters: the paper's "going to
+        dock" rule sends a charging robot with a very low battery back to GoingToDock,
+        and only a charge that goes on meanwhile lets the level leave "very low".
+        """
+        task = self.view.task_type(self.view.value(self.robot, AC.current_task))
+        if task == "Charging":
+            return True
+        dock = self.view.value(self.robot, AC.dock)
+        docked = dock is not None and self.view.value(self.robot, AC.location) == dock
+        return docked and not moving and task in ("GoingToDock", "Docking")
 
     def _obey(self, device: URIRef, driver: Driver, now: float) -> None:
         """Pass the commanded mode and any fault injection from the space to the driver."""
