@@ -4,21 +4,13 @@ from __future__ import annotations
 
 import heapq
 from collections import Counter, deque
-from dataclasses import dataclass, field
 
 from space.reasoning.compile import CompiledRule
 from space.reasoning.errors import RuleLoopError
 from space.reasoning.joins import Match
 
-
-@dataclass(order=True)
-class Activation:
-    """A production rule matched; it fires later if the match still holds."""
-
-    order: int
-    recency: int
-    rule: CompiledRule = field(compare=False)
-    match: Match = field(compare=False)
+Activation = tuple[int, int, CompiledRule, Match]
+"""A production rule matched (rule order, -recency, rule, match); it fires if the match holds."""
 
 
 class Agenda:
@@ -46,12 +38,12 @@ class Agenda:
             return
         self._pending.add(key)
         self._seq += 1
-        heapq.heappush(self._heap, Activation(rule.order, -self._seq, rule, match))
+        heapq.heappush(self._heap, (rule.order, -self._seq, rule, match))
 
     def pop(self) -> Activation:
         """Take the next activation (the caller checks it still holds)."""
         activation = heapq.heappop(self._heap)
-        self._pending.discard((activation.order, activation.match[0]))
+        self._pending.discard((activation[0], activation[3][0]))
         return activation
 
     def count(self, rule: CompiledRule) -> None:

@@ -48,15 +48,18 @@ class ChangeLog:
             if t[2] in functors:
                 continue
             is_present, is_asserted = t in triples, t in asserted
+            if is_present == was_present and is_asserted == was_asserted:
+                continue
+            triple = self._decode(t)
             if is_present != was_present:
                 now = is_asserted if is_present else was_asserted
-                change = Change(self._decode(t), Origin.ASSERTED if now else Origin.INFERRED)
+                change = Change(triple, Origin.ASSERTED if now else Origin.INFERRED)
                 (added if is_present else removed).append(change)
             if is_asserted != self._expected.get(t, was_asserted):
-                by_rules[0 if is_asserted else 1].append(self._decode(t))
+                by_rules[0 if is_asserted else 1].append(triple)
             was_inferred = was_present and not was_asserted
             if (is_present and not is_asserted) != was_inferred:
-                inferred[1 if was_inferred else 0].append(self._decode(t))
+                inferred[1 if was_inferred else 0].append(triple)
         return Delta(
             added=tuple(added),
             removed=tuple(removed),

@@ -30,6 +30,7 @@ class CompiledRule:
     """
 
     rule: Rule
+    label: str
     order: int
     production: bool
     heads: Heads
@@ -38,34 +39,23 @@ class CompiledRule:
     actions: tuple[tuple[Builtin, ArgsFn], ...]
     guards: tuple[tuple[Builtin, ArgsFn], ...]
 
-    @property
-    def label(self) -> str:
-        """Return the rule's name (or where it was written)."""
-        return self.rule.label
-
 
 Entry = tuple[CompiledRule, Trigger]
 
 
 class RuleIndex:
-    """Find the joins a triple can start, when it is added or (for noValue) removed."""
+    """Find the joins a triple can start, when it is added or (for noValue) removed.
+
+    A new triple `(s, p, o)` starts the joins of `by_po[(p, o)]`, `by_p[p]` and
+    `anywhere` (read directly by the engine's inner loop).
+    """
 
     def __init__(self) -> None:
-        self._by_po: dict[tuple[int, int], list[Entry]] = {}
-        self._by_p: dict[int, list[Entry]] = {}
-        self._anywhere: list[Entry] = []
+        self.by_po: dict[tuple[int, int], list[Entry]] = {}
+        self.by_p: dict[int, list[Entry]] = {}
+        self.anywhere: list[Entry] = []
         self._removal_by_p: dict[int, list[Entry]] = {}
         self._removal_anywhere: list[Entry] = []
-
-    def on_added(self, p: int, o: int) -> Iterator[Entry]:
-        """Yield the joins a new triple with predicate `p` and object `o` starts."""
-        found = self._by_po.get((p, o))
-        if found:
-            yield from found
-        found = self._by_p.get(p)
-        if found:
-            yield from found
-        yield from self._anywhere
 
     def on_removed(self, p: int) -> Iterator[Entry]:
         """Yield the joins whose noValue may accept since a triple with predicate `p` went."""
@@ -82,6 +72,7 @@ class RuleIndex:
         calls = [i for i in rule.head if isinstance(i, Call)]
         compiled = CompiledRule(
             rule=rule,
+            label=rule.label,
             order=order,
             production=any(not c.builtin.monotonic for c in _calls(rule)),
             heads=compiler.heads(rule, slots),
@@ -114,12 +105,12 @@ class RuleIndex:
 
     def _file(self, entry: Entry, p: object, o: object, compiler: JoinCompiler) -> None:
         if isinstance(p, Var | Functor):
-            self._anywhere.append(entry)
+            self.anywhere.append(entry)
         elif isinstance(o, Var | Functor):
-            self._by_p.setdefault(compiler.constant(p), []).append(entry)  # type: ignore[arg-type]
+            self.by_p.setdefault(compiler.constant(p), []).append(entry)  # type: ignore[arg-type]
         else:
             key = (compiler.constant(p), compiler.constant(o))  # type: ignore[arg-type]
-            self._by_po.setdefault(key, []).append(entry)
+            self.by_po.setdefault(key, []).append(entry)
 
 
 def _calls(rule: Rule) -> Iterator[Call]:

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import enum
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
 
+from space.reasoning.triples import T
 from space.terms import Triple
 
 
@@ -23,14 +25,43 @@ class Change(NamedTuple):
     origin: Origin
 
 
-@dataclass(frozen=True)
 class Firing:
-    """One firing of a production rule: what matched, and what it changed."""
+    """One firing of a production rule: what matched (`triggers`), and what it changed.
 
-    rule: str
-    triggers: tuple[Triple, ...]
-    asserted: tuple[Triple, ...]
-    retracted: tuple[Triple, ...]
+    The triples are decoded when first read: most callers only count firings.
+    """
+
+    __slots__ = ("_asserted", "_decode", "_retracted", "_triggers", "rule")
+
+    def __init__(
+        self,
+        rule: str,
+        triggers: tuple[T, ...],
+        asserted: tuple[T, ...],
+        retracted: tuple[T, ...],
+        decode: Callable[[T], Triple],
+    ) -> None:
+        self.rule = rule
+        self._triggers, self._asserted, self._retracted = triggers, asserted, retracted
+        self._decode = decode
+
+    @property
+    def triggers(self) -> tuple[Triple, ...]:
+        """Return the triples the rule's body matched, in body order."""
+        return tuple(map(self._decode, self._triggers))
+
+    @property
+    def asserted(self) -> tuple[Triple, ...]:
+        """Return the triples the rule's head asserted."""
+        return tuple(map(self._decode, self._asserted))
+
+    @property
+    def retracted(self) -> tuple[Triple, ...]:
+        """Return the triples the rule dropped or removed."""
+        return tuple(map(self._decode, self._retracted))
+
+    def __repr__(self) -> str:
+        return f"Firing({self.rule!r}, triggers={self.triggers}, asserted={self.asserted})"
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ each firing's changes fully applied (closure included) before the next.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Sequence
+from itertools import chain
 from pathlib import Path
 
 from rdflib import BNode, Graph, Literal, URIRef
@@ -209,13 +210,14 @@ class RuleEngine:
     def _propagate(self, queue: list[T]) -> None:
         """Run the joins each new triple starts until nothing new is derived."""
         store, triples, support, ctx = self._store, self._store.triples, self._support, self._ctx
-        touch, on_added, agenda = self._log.touch, self._index.on_added, self._agenda
+        touch, agenda = self._log.touch, self._agenda
+        by_po, by_p, anywhere = self._index.by_po, self._index.by_p, self._index.anywhere
         out: list[Match] = []
         position = 0
         while position < len(queue):
             s, p, o = queue[position]
             position += 1
-            for compiled, trigger in on_added(p, o):
+            for compiled, trigger in chain(by_po.get((p, o), ()), by_p.get(p, ()), anywhere):
                 trigger(s, p, o, out)
                 if not out:
                     continue
@@ -266,9 +268,8 @@ class RuleEngine:
         """Fire activations one at a time while their match still holds."""
         triples, ctx = self._store.triples, self._ctx
         while self._agenda:
-            activation = self._agenda.pop()
-            compiled, (premises, bindings) = activation.rule, activation.match
-            if not all(t in triples for t in premises):
+            _, _, compiled, (premises, bindings) = self._agenda.pop()
+            if not triples.issuperset(premises):
                 continue
             if any(b.run(ctx, args(bindings)) is None for b, args in compiled.guards):
                 continue
@@ -281,18 +282,15 @@ class RuleEngine:
         removed = [premises[i] for i in compiled.removes]
         for builtin, args in compiled.actions:
             builtin.act(self._ctx, args(bindings))
-        self._unassert(dropped, notify=False)
-        self._unassert(removed, notify=True)
+        if dropped:
+            self._unassert(dropped, notify=False)
+        if removed:
+            self._unassert(removed, notify=True)
         self._assert(heads, (compiled.order, premises))
-        decode = self._decode
-        self._firings.append(
-            Firing(
-                rule=compiled.label,
-                triggers=tuple(decode(t) for t in premises),
-                asserted=tuple(decode(t) for t in heads if t[2] not in self.terms.functors),
-                retracted=tuple(decode(t) for t in (*dropped, *removed)),
-            )
-        )
+        functors = self.terms.functors
+        asserted = tuple(t for t in heads if t[2] not in functors)
+        retracted = (*dropped, *removed)
+        self._firings.append(Firing(compiled.label, premises, asserted, retracted, self._decode))
 
     def _undo(self) -> None:
         """Reverse this update's assertions and retractions, with production rules off."""

@@ -205,8 +205,10 @@ class _Body:
             return self.bound.get(term)
         return str(self.compiler.constant(term))
 
-    def _rank(self, pattern: Pattern) -> int:
-        return _ACCESS[tuple(self._expr(t) is not None for t in pattern.terms)][0]
+    def _rank(self, pattern: Pattern) -> tuple[int, int]:
+        """Rank by access path, then prefer joining on a bound variable over a class extent."""
+        path = _ACCESS[tuple(self._expr(t) is not None for t in pattern.terms)][0]
+        return path, -sum(1 for t in pattern.terms if isinstance(t, Var) and t in self.bound)
 
     def _seed(self, terms: tuple[Term | None, ...], index: int | None) -> None:
         exprs = []

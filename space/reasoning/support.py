@@ -56,8 +56,10 @@ class Support:
         triple leaves the store. Returns the triples that are gone for good,
         in the order they were reached.
         """
-        over: dict[T, None] = {}
         stack = [t for t in doomed if t in store]
+        if len(stack) == 1 and not self.dependents.get(stack[0]):
+            return self._retract_leaf(stack[0], store, touch)
+        over: dict[T, None] = {}
         while stack:
             triple = stack.pop()
             if triple in over or triple in asserted:
@@ -71,6 +73,16 @@ class Support:
         gone = [t for t in over if t not in store]
         self._forget(gone)
         return gone
+
+    def _retract_leaf(self, triple: T, store: TripleStore, touch: Callable[[T], None]) -> list[T]:
+        """Retract one triple that supports nothing: the common case, kept cheap."""
+        found = self.derivations.get(triple)
+        if found and any(store.triples.issuperset(p) for _, p in found):
+            return []
+        touch(triple)
+        store.remove(triple)
+        self._forget([triple])
+        return [triple]
 
     def _rederive(self, over: dict[T, None], store: TripleStore) -> None:
         """Put back over-deleted triples that still have a derivation on standing premises."""
