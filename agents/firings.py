@@ -1,0 +1,71 @@
+"""Records of rule firings in the space, so that people can see why the robot changed.
+
+Each production firing becomes an `ac:RuleFiring` individual (`ac:firing_N`)
+naming its rule, the changeset that caused it and the robot it concerned. Only
+the last `keep` records stay in the space: the log is for the HMI's "last rule
+firings", not an archive.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Iterable
+from datetime import UTC, datetime
+
+from rdflib import RDF, Graph, Literal, URIRef
+from rdflib.term import Node
+
+from agents.view import AC
+from space.terms import Triple
+
+FIRING_PREFIX = str(AC) + "firing_"
+
+
+def is_record(triple: Triple) -> bool:
+    """Return True for a triple of a firing record (the rules never need to see those)."""
+    return str(triple[0]).startswith(FIRING_PREFIX)
+
+
+class FiringLog:
+    """The firing records this reasoner keeps in the space, oldest first."""
+
+    def __init__(self, keep: int = 100) -> None:
+        self.keep = keep
+        self.next = 1
+        self._records: deque[list[Triple]] = deque()
+
+    def restore(self, triples: Iterable[Triple]) -> None:
+        """Take back the records found in the space (after a restart), numbering after them."""
+        graph = Graph()
+        for triple in triples:
+            if is_record(triple):
+                graph.add(triple)
+        numbered = []
+        for record in set(graph.subjects()):
+            seq = graph.value(record, AC.firing_seq)
+            number = int(seq) if isinstance(seq, Literal) and str(seq).isdigit() else 0
+            numbered.append((number, list(graph.triples((record, None, None)))))
+        for number, triples_of in sorted(numbered, key=lambda item: item[0]):
+            self._records.append(triples_of)
+            self.next = max(self.next, number + 1)
+
+    def record(
+        self, rule: str, cause: str | None, robot: Node, when: datetime | None = None
+    ) -> tuple[list[Triple], list[Triple]]:
+        """Add one firing; return (triples to add, triples of records to drop)."""
+        iri = URIRef(f"{FIRING_PREFIX}{self.next}")
+        triples: list[Triple] = [
+            (iri, RDF.type, AC.RuleFiring),
+            (iri, AC.rule_name, Literal(rule)),
+            (iri, AC.robot, robot),
+            (iri, AC.fired_at, Literal(when or datetime.now(UTC))),
+            (iri, AC.firing_seq, Literal(self.next)),
+        ]
+        if cause:
+            triples.append((iri, AC.cause, Literal(cause)))
+        self.next += 1
+        self._records.append(triples)
+        dropped: list[Triple] = []
+        while len(self._records) > self.keep:
+            dropped += self._records.popleft()
+        return triples, dropped
