@@ -1,0 +1,69 @@
+"""`tspace reason`: run rules over a Turtle file, apply an update, print the state."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+ORDER = 70
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the `reason` sub-command."""
+    p = sub.add_parser(
+        "reason",
+        help="run rules over RDF files and print the resulting state",
+        description="Load the ontology and the data, run the rules to a fixpoint, apply the "
+        "update, and print the state as Turtle. As in the space, a value of an "
+        "owl:FunctionalProperty in the update replaces the asserted old value. "
+        "The production rules that fired are listed on stderr.",
+    )
+    p.add_argument("--rules", nargs="+", required=True, metavar="RULES", help="rules files")
+    p.add_argument("--data", nargs="+", required=True, metavar="DATA", help="RDF data files")
+    p.add_argument("--update", nargs="*", default=[], metavar="FILE", help="triples to assert")
+    p.add_argument("--retract", nargs="*", default=[], metavar="FILE", help="triples to retract")
+    p.add_argument("--ontology", nargs="*", default=[], metavar="FILE", help="OWL ontology files")
+    p.add_argument(
+        "--show",
+        choices=("all", "asserted", "inferred"),
+        default="all",
+        help="which triples to print (default all)",
+    )
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Reason and print the state on stdout (Turtle) and the firings on stderr."""
+    from rdflib import OWL, RDF, Graph
+
+    from space.reasoning import Origin, RuleEngine, read_graph
+
+    ontology = read_graph(args.ontology)
+    engine = RuleEngine.from_files(rules=args.rules, ontology=args.ontology)
+    deltas = [engine.load(read_graph(args.data))]
+    update, retract = read_graph(args.update), read_graph(args.retract)
+    if len(update) or len(retract):
+        functional = set(ontology.subjects(RDF.type, OWL.FunctionalProperty))
+        replaced = [
+            (s, p, old)
+            for s, p, o in update
+            if p in functional
+            for old in engine.graph.objects(s, p)
+            if old != o
+        ]
+        deltas.append(engine.apply(added=update, removed=[*retract, *replaced]))
+    for delta in deltas:
+        for firing in delta.firings:
+            print(
+                f"# fired {firing.rule}: retracted {len(firing.retracted)}, "
+                f"asserted {len(firing.asserted)}",
+                file=sys.stderr,
+            )
+    origin = {"all": None, "asserted": Origin.ASSERTED, "inferred": Origin.INFERRED}[args.show]
+    out = Graph()
+    for prefix, namespace in (*ontology.namespaces(), *read_graph(args.data).namespaces()):
+        out.bind(prefix, namespace, override=False)
+    for triple in engine.triples(origin):
+        out.add(triple)
+    sys.stdout.write(out.serialize(format="turtle"))
+    return 0
