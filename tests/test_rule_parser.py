@@ -1,0 +1,119 @@
+"""The Jena rule syntax: what parses, into what, and the errors with file, line and column."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from rdflib import Literal, Namespace, URIRef
+
+XSD_NS = "http://www.w3.org/2001/XMLSchema#"
+
+from space.reasoning import RuleError, RuleSyntaxError, default_registry, load_rules, parse_rules
+from space.reasoning.rules import Call, Functor, Pattern, Var
+
+DATA = Path(__file__).parent / "data" / "rules"
+EX = Namespace("http://example.org/")
+REG = default_registry()
+
+
+def parse(text: str) -> list:
+    return parse_rules(text, REG, source="t.rules")
+
+
+def test_named_and_unnamed_rules_with_prefixes_and_comments():
+    rules = parse(
+        """@prefix ex: <http://example.org/>.
+        # a comment
+        [r1: (?a ex:p ?b) -> (?b ex:q ?a)]   // another comment
+        [(?a rdf:type ex:C) -> (?a rdf:type <http://example.org/D>)]
+        """
+    )
+    assert [r.name for r in rules] == ["r1", None]
+    assert rules[0].body == (Pattern(Var("a"), EX.p, Var("b"), rules[0].body[0].where),)
+    assert rules[1].head[0].o == EX.D
+    assert rules[1].label.startswith("<rule at t.rules:4:")
+
+
+def test_literals_numbers_and_functors():
+    (rule,) = parse(
+        """@prefix ex: <http://example.org/>.
+        [r: (?a ex:p 'x'), (?a ex:q "y"@en), (?a ex:r '5'^^xsd:int), (?a ex:s 5), (?a ex:t 2.5)
+            -> (?a ex:u f(?a, 'z'))]"""
+    )
+    objects = [p.o for p in rule.body]
+    assert objects == [
+        Literal("x"),
+        Literal("y", lang="en"),
+        Literal("5", datatype=URIRef(XSD_NS + "int")),
+        Literal(5),
+        Literal("2.5", datatype=URIRef(XSD_NS + "decimal")),
+    ]
+    assert rule.head[0].o == Functor("f", (Var("a"), Literal("z")))
+
+
+def test_paper_figure_5_parses_with_drop_six_on_the_speed_triple():
+    (rule,) = load_rules([Path(__file__).parents[1] / "rules" / "paper.rules"], REG)[:1]
+    assert rule.name == "verylow_battery_causes_low_speed_existing"
+    drop = rule.head[0]
+    assert isinstance(drop, Call) and drop.name == "drop"
+    assert rule.body[int(drop.args[0])].p == URIRef(
+        "https://w3id.org/tspace/selfconfig#motion_speed"
+    )
+
+
+def test_include_resolves_relative_to_the_including_file_and_shares_prefixes():
+    rules = load_rules([DATA / "base.rules"], REG)
+    assert [r.name for r in rules] == ["grandparent", "parent"]
+    assert rules[0].where.file.endswith("child.rules")
+
+
+def test_include_cycle_and_missing_file_are_errors():
+    with pytest.raises(RuleSyntaxError, match="include cycle"):
+        load_rules([DATA / "cycle_a.rules"], REG)
+    with pytest.raises(RuleSyntaxError, match=r"t.rules:1:1: cannot read"):
+        parse("@include <nowhere.rules>.")
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("[r1: (?a ?b ?c) -> foo(?a)]", "t.rules:1:20: in rule 'r1': unknown builtin 'foo'"),
+        (
+            "[r1: (?a ?b ?c) notEqual(?a) -> ]",
+            "t.rules:1:17: in rule 'r1': notEqual() takes 2 arguments, got 1",
+        ),
+        (
+            "[r1: (?a ?b ?c) -> drop(3)]",
+            "t.rules:1:20: in rule 'r1': drop(3): the body has items 0..0",
+        ),
+        (
+            "[r1: (?a ?b ?c) notEqual(?a, 1) -> drop(1)]",
+            "in rule 'r1': drop(1): body item 1 is not a triple",
+        ),
+        (
+            "\n[r2: (?a ?b ?c) -> (?a ?b ?d)]",
+            "t.rules:2:20: in rule 'r2': variable ?d in the head is not bound by the body",
+        ),
+        ("[r3: (?a x:b ?c) -> ]", "t.rules:1:10: in rule 'r3': unknown prefix 'x:'"),
+        ("[r4: (?a ?b ?c) -> notEqual(?a, ?b)]", "notEqual() cannot be used in a rule's head"),
+        ("[r5: (?a ?b ?c) <- (?a ?b ?c)]", "backward rules (<-) are not supported"),
+        ("[(?a ?b ?c) lessThan(?x, 1) -> ]", "lessThan() needs ?x bound, but nothing binds it"),
+    ],
+)
+def test_rule_errors_name_file_line_column_and_rule(text, message):
+    with pytest.raises(RuleError) as caught:
+        parse(text)
+    assert message in str(caught.value)
+
+
+def test_syntax_error_says_where_and_in_which_rule():
+    text = "[ok: (?a ?b ?c) -> (?a ?b ?c)]\n\n[broken: (?a ?b ?c -> (?a ?b ?c)]"
+    with pytest.raises(RuleSyntaxError) as caught:
+        parse(text)
+    assert str(caught.value) == "t.rules:3:20: in rule 'broken': syntax error: unexpected '->'"
+
+
+def test_unterminated_rule_is_a_syntax_error_at_the_end():
+    with pytest.raises(RuleSyntaxError, match=r"t.rules:1:\d+: in rule 'r9': syntax error"):
+        parse("[r9: (?a ?b ?c) -> (?a ?b 'x")
