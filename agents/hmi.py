@@ -18,9 +18,10 @@ import threading
 from collections import deque
 from dataclasses import asdict
 
-from rdflib import Literal
+from rdflib import RDF, RDFS, Literal, URIRef
+from rdflib.term import Node
 
-from agents.base import Agent, run_agent
+from agents.base import Agent, local_name, run_agent
 from agents.hmi_web.server import CommandError, Commands, HmiServer, StateBoard
 from agents.view import AC
 from space import Change
@@ -106,14 +107,42 @@ class Hmi(Agent):
                 "robots": [asdict(r) for r in read_robots(graph)],
                 "firings": [asdict(f) for f in read_firings(self.records)],
                 "tasks": [t for t in TASK_TYPES if self.view.task_of_type(t) is not None],
+                "people": self._named(AC.Person, AC.Patient),
+                "places": self._named(AC.Room, AC.Corridor, AC.Dock),
                 "levels": self._levels(),
             }
         )
+
+    def _named(self, *classes: URIRef) -> list[dict[str, str]]:
+        """Return the individuals of `classes` as {"name", "label"}, sorted by name."""
+        found = {i for c in classes for i in self.view.graph.subjects(RDF.type, c)}
+        return [
+            {"name": local_name(i), "label": self.view.text(i, RDFS.label) or local_name(i)}
+            for i in sorted(found)
+            if isinstance(i, URIRef)
+        ]
 
     def _levels(self) -> list[str]:
         """Return the battery levels the integrator defined, emptiest first."""
         levels = self.view.levels(AC.BatteryLevel, AC.below_percent)
         return sorted(levels, key=levels.__getitem__)
+
+    def _request_task(self, robot: URIRef, params: dict) -> str | None:
+        """Request a task, with whom it is for and where to guide them if given."""
+        task = self.view.task_of_type(str(params.get("task", "")))
+        if task is None:
+            raise CommandError(f"no task of type {params.get('task')!r} in the space")
+        values: dict[tuple[Node, Node], Node | None] = {(robot, AC.requested_task): task}
+        for key, predicate in (
+            ("person", AC.attended_person),
+            ("destination", AC.guide_destination),
+        ):
+            if params.get(key):
+                individual = AC[str(params[key])]
+                if not self.view.objects(individual, RDF.type):
+                    raise CommandError(f"no {key} {params[key]!r} in the space")
+                values[(robot, predicate)] = individual
+        return self.set_values(values)
 
     def _command(self, name: str, params: dict) -> str | None:
         """Carry out a command from the page; return the changeset id (None: no change).
@@ -126,10 +155,7 @@ class Hmi(Agent):
         if not self.view.objects(robot, AC.has_device):
             raise CommandError(f"no robot {params.get('robot')!r} in the space")
         if name == "task":
-            task = self.view.task_of_type(str(params.get("task", "")))
-            if task is None:
-                raise CommandError(f"no task of type {params.get('task')!r} in the space")
-            return self.set_values({(robot, AC.requested_task): task})
+            return self._request_task(robot, params)
         level = str(params.get("level", ""))
         thresholds = self.view.levels(AC.BatteryLevel, AC.below_percent)
         battery = self.view.device(robot, AC.Battery)
@@ -146,5 +172,10 @@ class Hmi(Agent):
         )
 
 
+def main(argv: list[str] | None = None) -> int:
+    """Run the HMI agent (see `--help`)."""
+    return run_agent(Hmi, argv)
+
+
 if __name__ == "__main__":
-    sys.exit(run_agent(Hmi))
+    sys.exit(main())

@@ -76,6 +76,7 @@ class Deployment:
         )
         self.mirror = SpaceMirror()
         self.scenario: ScenarioRun | None = None
+        self.robot = launch.robots[0] if launch.robots else "robot1"
 
     def agent_argv(self, agent: AgentSpec) -> tuple[str, ...]:
         """Return the command line of one agent process."""
@@ -114,6 +115,9 @@ class Deployment:
             if ts is None:
                 return 1
             self._load(ts)
+            scenario = self.options.scenario
+            if scenario is not None and scenario.prepare is not None:
+                scenario.prepare(ts, self.robot)
             for agent in self.launch.agents:
                 self.supervisor.start(
                     ProcessSpec(agent.name, self.agent_argv(agent), restart=agent.restart)
@@ -174,9 +178,8 @@ class Deployment:
     def _loop(self, ts: TripleSpace) -> int:
         options = self.options
         if options.scenario is not None:
-            robot = self.launch.robots[0] if self.launch.robots else "robot1"
             self.scenario = ScenarioRun(
-                options.scenario, robot, self.view.event, step_timeout=options.step_timeout
+                options.scenario, self.robot, self.view.event, step_timeout=options.step_timeout
             )
             run = self.scenario
             self.mirror.watch(lambda: run.observe(self.mirror))

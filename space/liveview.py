@@ -54,7 +54,8 @@ def firing_line(firing: Firing) -> str:
     """Return a firing and its cause on one line."""
     what = "; ".join(firing.added) or "; ".join(f"-{t}" for t in firing.removed)
     because = f" <- {firing.cause_agent}: {'; '.join(firing.cause)}" if firing.cause_agent else ""
-    return f"{firing.time} {firing.agent}: {what}{because}"
+    rules = f" [{', '.join(firing.rules)}]" if firing.rules else ""
+    return f"{firing.time} {firing.agent}{rules}: {what}{because}"
 
 
 class LiveView:

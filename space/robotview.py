@@ -28,6 +28,7 @@ DEVICE_CLASSES = (
     AC.Speaker,
     AC.Microphone,
 )
+FIRING_PROPERTIES = frozenset({AC.rule_name, AC.cause, AC.fired_at, AC.firing_seq, AC.robot})
 
 
 @dataclass(frozen=True)
@@ -72,6 +73,7 @@ class Firing:
         seq: its place in the store's order.
         agent: who wrote it (the reasoner for rule conclusions).
         time: HH:MM:SS.mmm of its HLC timestamp, or "" if unknown.
+        rules: names of the rules that fired (from the `ac:RuleFiring` records it adds).
         added: the conclusions, compacted ("ac:robot1_base ac:motion_speed low").
         removed: what it retracted, compacted.
         cause_agent: who wrote the cause, if the cause is still remembered.
@@ -81,6 +83,7 @@ class Firing:
     seq: int
     agent: str
     time: str
+    rules: tuple[str, ...]
     added: tuple[str, ...]
     removed: tuple[str, ...]
     cause_agent: str | None
@@ -157,6 +160,12 @@ def read_robots(graph: Graph) -> list[RobotState]:
     return states
 
 
+def _bookkeeping(triple: Triple) -> bool:
+    """Return True for the triples of an `ac:RuleFiring` record."""
+    _, p, o = triple
+    return p in FIRING_PROPERTIES or (p == RDF.type and o == AC.RuleFiring)
+
+
 def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firing]:
     """Return the last `limit` changesets that name a cause, newest first."""
     records = list(records)
@@ -167,13 +176,16 @@ def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firin
             continue
         cause = by_id.get(record.cause)
         stamp = record.timestamp.strftime("%H:%M:%S.%f")[:-3] if record.timestamp else ""
+        # The reasoner's bookkeeping (who fired, when) is shown as rule names, not triples.
+        names = sorted({str(o) for _, p, o in record.added if p == AC.rule_name})
         firings.append(
             Firing(
                 seq=record.seq,
                 agent=record.agent,
                 time=stamp,
-                added=tuple(describe(t) for t in record.added),
-                removed=tuple(describe(t) for t in record.removed),
+                rules=tuple(names),
+                added=tuple(describe(t) for t in record.added if not _bookkeeping(t)),
+                removed=tuple(describe(t) for t in record.removed if not _bookkeeping(t)),
                 cause_agent=cause.agent if cause else None,
                 cause=tuple(describe(t) for t in cause.added) if cause else (),
             )

@@ -14,7 +14,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from space.robotview import AC, RobotState, read_robots, task_named
+from rdflib import Literal
+
+from space.robotview import AC, RobotState, battery_of, read_robots, task_named
 
 if TYPE_CHECKING:
     from space import TripleSpace
@@ -43,21 +45,51 @@ class Step:
 
 @dataclass(frozen=True)
 class Scenario:
-    """A named story: its steps and the agent options it needs (e.g. a faster clock)."""
+    """A named story.
+
+    Attributes:
+        name: what `--scenario` calls it.
+        steps: what must happen, in order.
+        agent_args: options appended per agent name (e.g. a faster clock).
+        prepare: run once the space is loaded and before any agent starts, to set
+            the stage (with the space and the robot's name).
+    """
 
     name: str
     steps: tuple[Step, ...]
     agent_args: dict[str, list[str]] = field(default_factory=dict)
+    prepare: Callable[[TripleSpace, str], None] | None = None
 
 
-def _assign(task_type: str) -> Callable[[TripleSpace, str], None]:
+def _assign(task_type: str, person: str) -> Callable[[TripleSpace, str], None]:
+    """Return an action that requests a task for a person, as the HMI does."""
+
     def act(ts: TripleSpace, robot: str) -> None:
         task = task_named(ts.query((None, AC.type, None)), task_type)
         if task is None:
             raise LookupError(f"the space has no task of type {task_type!r}")
-        ts.write([(AC[robot], AC.requested_task, task)])
+        ts.write(
+            [(AC[robot], AC.requested_task, task), (AC[robot], AC.attended_person, AC[person])]
+        )
 
     return act
+
+
+def _battery_at(percent: int, level: str) -> Callable[[TripleSpace, str], None]:
+    """Return an action that sets the battery's charge, read by hw_monitor when it starts."""
+
+    def prepare(ts: TripleSpace, robot: str) -> None:
+        battery = battery_of(ts.query(None), robot)
+        if battery is None:
+            raise LookupError(f"robot {robot} has no battery in the space")
+        ts.write(
+            [
+                (battery, AC.charge_percent, Literal(percent)),
+                (battery, AC.battery_level, Literal(level)),
+            ]
+        )
+
+    return prepare
 
 
 def _devices_saving(robot: RobotState) -> bool:
@@ -75,7 +107,7 @@ BATTERY = Scenario(
         Step(
             "robot attends a patient (task AttendingPatient)",
             lambda r: r.task_type == "AttendingPatient",
-            _assign("AttendingPatient"),
+            _assign("AttendingPatient", "patient_ane"),
         ),
         Step("battery drains to very low", lambda r: r.battery == "very low"),
         Step("robot heads to the dock (task GoingToDock)", lambda r: r.task_type == "GoingToDock"),
@@ -92,7 +124,11 @@ BATTERY = Scenario(
             lambda r: r.task_type == "AttendingPatient",
         ),
     ),
-    agent_args={"hw_monitor": ["--time-scale", "20"]},
+    # A simulated minute every two real seconds; the battery starts a little above
+    # "very low" so the drain is over before the patient's visit takes too long
+    # (AttendingPatient's max_duration).
+    agent_args={name: ["--time-scale", "30"] for name in ("hw_monitor", "nav_monitor", "behavior")},
+    prepare=_battery_at(16, "low"),
 )
 
 SCENARIOS = {s.name: s for s in (BATTERY,)}

@@ -7,13 +7,15 @@ function text(value) {
   return value === null || value === undefined ? "–" : String(value);
 }
 
+// options: strings, or {name, label} objects.
 function fillSelect(select, options) {
-  const wanted = options.join("\n");
+  const pairs = options.map((o) => (typeof o === "string" ? [o, o] : [o.name, o.label]));
+  const wanted = JSON.stringify(pairs);
   if (select.dataset.options === wanted) {
     return; // keep the user's choice while the state updates
   }
   select.dataset.options = wanted;
-  select.replaceChildren(...options.map((o) => new Option(o, o)));
+  select.replaceChildren(...pairs.map(([value, label]) => new Option(label, value)));
 }
 
 async function send(card, path, body) {
@@ -41,7 +43,12 @@ function cardFor(name) {
   card.dataset.robot = name;
   card.querySelector(".assign").addEventListener("submit", (event) => {
     event.preventDefault();
-    send(card, "/api/task", { robot: name, task: card.querySelector(".task-select").value });
+    const task = card.querySelector(".task-select").value;
+    const request = { robot: name, task, person: card.querySelector(".person-select").value };
+    if (task === "Guiding") {
+      request.destination = card.querySelector(".place-select").value;
+    }
+    send(card, "/api/task", request);
   });
   card.querySelector(".battery-form").addEventListener("submit", (event) => {
     event.preventDefault();
@@ -76,6 +83,8 @@ function renderRobot(robot, state) {
     }),
   );
   fillSelect(card.querySelector(".task-select"), state.tasks || []);
+  fillSelect(card.querySelector(".person-select"), state.people || []);
+  fillSelect(card.querySelector(".place-select"), state.places || []);
   fillSelect(card.querySelector(".battery-select"), state.levels || []);
 }
 
@@ -86,7 +95,8 @@ function renderFirings(firings) {
       item.className = "firing";
       const what = firing.added.length ? firing.added : firing.removed.map((t) => `−${t}`);
       const cause = firing.cause_agent ? ` ← ${firing.cause_agent}: ${firing.cause.join("; ")}` : "";
-      item.textContent = `${firing.time} ${firing.agent}: ${what.join("; ")}${cause}`;
+      const rules = firing.rules.length ? ` [${firing.rules.join(", ")}]` : "";
+      item.textContent = `${firing.time} ${firing.agent}${rules}: ${what.join("; ")}${cause}`;
       return item;
     }),
   );
