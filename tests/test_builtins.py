@@ -7,11 +7,10 @@ from datetime import UTC, datetime
 import pytest
 from rdflib import BNode, Literal, Namespace, URIRef
 
-XSD_NS = "http://www.w3.org/2001/XMLSchema#"
-
 from space.reasoning import Builtin, RuleEngine, default_registry, parse_rules
 from space.reasoning.builtins import Args, Context
 
+XSD_NS = "http://www.w3.org/2001/XMLSchema#"
 EX = Namespace("http://example.org/")
 PREFIX = "@prefix ex: <http://example.org/>.\n"
 

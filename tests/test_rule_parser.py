@@ -7,12 +7,11 @@ from pathlib import Path
 import pytest
 from rdflib import Literal, Namespace, URIRef
 
-XSD_NS = "http://www.w3.org/2001/XMLSchema#"
-
 from space.reasoning import RuleError, RuleSyntaxError, default_registry, load_rules, parse_rules
 from space.reasoning.rules import Call, Functor, Pattern, Var
 
 DATA = Path(__file__).parent / "data" / "rules"
+XSD_NS = "http://www.w3.org/2001/XMLSchema#"
 EX = Namespace("http://example.org/")
 REG = default_registry()
 
