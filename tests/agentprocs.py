@@ -95,3 +95,10 @@ def value(ts: object, subject: object, predicate: object) -> object:
     """Return the one object of (subject, predicate) in the space, None if absent."""
     found = sorted(ts.query((subject, predicate, None)).objects())  # type: ignore[attr-defined]
     return found[0] if len(found) == 1 else None
+
+
+def alive(ts: object, name: str) -> bool:
+    """Return True if agent `name` holds its liveliness token in the test's space."""
+    key = f"tspace/{ts.space}/@agents/{name}"  # type: ignore[attr-defined]
+    replies = ts.session.liveliness().get(key, timeout=2.0)  # type: ignore[attr-defined]
+    return any(reply.ok is not None for reply in replies)

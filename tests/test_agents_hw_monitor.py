@@ -3,11 +3,10 @@
 import signal
 
 import pytest
-from agentprocs import Launcher, knowledge, value
+from agentprocs import Launcher, alive, knowledge, value
 from rdflib import Literal, Namespace
 
 from conftest import AC_NS, wait_for
-from space.presence import alive_agents
 
 AC = Namespace(AC_NS)
 
@@ -94,13 +93,13 @@ def test_kill_9_then_restart_rebuilds_the_battery_from_the_space(robot, launch):
     robot.write([(AC.robot1_microphone, AC.running_mode, Literal("stand-by"))])
     wait_for(lambda: value(robot, AC.robot1_microphone, AC.actual_mode) == Literal("stand-by"))
     name = "hw_monitor.robot1"
-    wait_for(lambda: name in alive_agents(robot.session, robot.space))
+    wait_for(lambda: alive(robot, name))
     agent.stop(signal.SIGKILL)
-    wait_for(lambda: name not in alive_agents(robot.session, robot.space), 15)
+    wait_for(lambda: not alive(robot, name), 15)
     before = charge(robot)
 
     agent.start()
-    wait_for(lambda: name in alive_agents(robot.session, robot.space))
+    wait_for(lambda: alive(robot, name))
     # Rebuilt from the space: the charge it had, not the robot file's 80 % nor --charge.
     wait_for(lambda: f"battery at {before} %" in agent.logs())
     assert charge(robot) <= before
@@ -110,7 +109,7 @@ def test_kill_9_then_restart_rebuilds_the_battery_from_the_space(robot, launch):
 def test_sigterm_stops_cleanly_and_withdraws_presence(robot, launch):
     agent = launch.start("hw_monitor")
     name = "hw_monitor.robot1"
-    wait_for(lambda: name in alive_agents(robot.session, robot.space))
+    wait_for(lambda: alive(robot, name))
     assert agent.stop(signal.SIGTERM) == 0
-    wait_for(lambda: name not in alive_agents(robot.session, robot.space))
+    wait_for(lambda: not alive(robot, name))
     assert "stopping" in agent.logs()
