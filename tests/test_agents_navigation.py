@@ -88,7 +88,8 @@ def test_going_to_dock_docks_charges_and_resumes_the_patient(robot, launch):
     assert state(robot, AC.resume_task) == AC.task_attending_patient
     wait_for(lambda: state(robot, AC.current_task) == AC.task_attending_patient, 20)
     wait_for(lambda: state(robot, AC.location) == AC.room_101)
-    assert state(robot, AC.battery_level, AC.robot1_battery) == Literal("full")
+    # It went back to work charged (full at 95 %; it drains again on the way).
+    assert int(state(robot, AC.charge_percent, AC.robot1_battery)) >= 85
 
 
 def test_kill_9_behavior_keeps_counting_the_task_time(robot, launch):
