@@ -16,8 +16,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
 
-from rdflib import Graph
-
 from space.client import TripleSpace
 from space.errors import SpaceError
 from space.launch import AgentSpec, Launch
@@ -26,6 +24,7 @@ from space.mirror import SpaceMirror
 from space.robotview import read_firings, read_robots
 from space.scenario import Scenario, ScenarioRun
 from space.supervisor import ProcessSpec, Supervisor
+from space.turtle import read_turtle
 
 STORE_STARTUP = 30.0
 TICK = 0.1
@@ -171,7 +170,7 @@ class Deployment:
             self.view.event(f"space {self.launch.space} holds {len(held)} triples; not reloading")
             return
         for path in self.launch.load:
-            graph = Graph().parse(path, format="turtle")
+            graph = read_turtle(str(path))
             ts.write(graph, timeout=10.0)
             self.view.event(f"loaded {path.name} ({len(graph)} triples)")
 
