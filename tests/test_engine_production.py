@@ -16,8 +16,10 @@ def engine(rules: str, **options) -> RuleEngine:
 
 
 SWITCH = """
-[off_when_low: (?d ex:battery 'low'), (?d ex:mode ?m), notEqual(?m, 'off') -> drop(1), (?d ex:mode 'off')]
-[on_when_ok: (?d ex:battery 'ok'), (?d ex:mode ?m), notEqual(?m, 'on') -> drop(1), (?d ex:mode 'on')]
+[off_when_low: (?d ex:battery 'low'), (?d ex:mode ?m), notEqual(?m, 'off')
+    -> drop(1), (?d ex:mode 'off')]
+[on_when_ok: (?d ex:battery 'ok'), (?d ex:mode ?m), notEqual(?m, 'on')
+    -> drop(1), (?d ex:mode 'on')]
 """
 
 

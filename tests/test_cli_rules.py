@@ -1,0 +1,58 @@
+"""`tspace rules check` and `tspace reason`, as a user runs them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rdflib import Graph, Literal, Namespace
+
+from space.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+AC = Namespace("https://w3id.org/tspace/selfconfig#")
+
+
+def test_rules_check_lists_rules_with_names(capsys):
+    assert main(["rules", "check", str(ROOT / "rules" / "paper.rules")]) == 0
+    out = capsys.readouterr().out
+    assert "3 rules" in out
+    assert "verylow_battery_causes_going_to_dock_task  (production)" in out
+
+
+def test_rules_check_reports_each_broken_file_and_fails(tmp_path, capsys):
+    bad = tmp_path / "bad.rules"
+    bad.write_text("[ok: (?a ?b ?c) -> (?a ?b ?c)]\n[r2: (?a ?b ?c) -> frobnicate(?a)]\n")
+    good = ROOT / "rules" / "paper.rules"
+    assert main(["rules", "check", str(bad), str(good)]) == 1
+    captured = capsys.readouterr()
+    assert f"{bad}:2:20: in rule 'r2': unknown builtin 'frobnicate'" in captured.err
+    assert "3 rules" in captured.out
+
+
+def test_reason_prints_the_state_after_the_update(tmp_path, capsys):
+    update = tmp_path / "update.ttl"
+    update.write_text(f'<{AC.robot1_battery}> <{AC.battery_level}> "very low" .\n')
+    args = [
+        "reason",
+        "--rules", str(ROOT / "rules" / "paper.rules"),
+        "--ontology", str(ROOT / "ontology" / "selfconfig.ttl"),
+        "--data", str(ROOT / "ontology" / "robots" / "hospital.ttl"),
+        "--update", str(update),
+        "--show", "asserted",
+    ]  # fmt: skip
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    state = Graph().parse(data=captured.out, format="turtle")
+    assert set(state.objects(AC.robot1_battery, AC.battery_level)) == {Literal("very low")}
+    assert set(state.objects(AC.robot1_base, AC.motion_speed)) == {Literal("low")}
+    assert set(state.objects(AC.robot1_speakers, AC.running_mode)) == {Literal("stand-by")}
+    assert "fired verylow_battery_causes_low_speed_existing" in captured.err
+
+
+def test_reason_reports_a_broken_rules_file(tmp_path, capsys):
+    bad = tmp_path / "bad.rules"
+    bad.write_text("[r: (?a ?b ?c) -> drop(4)]")
+    data = tmp_path / "d.ttl"
+    data.write_text("")
+    assert main(["reason", "--rules", str(bad), "--data", str(data)]) == 1
+    assert "in rule 'r': drop(4): the body has items 0..0" in capsys.readouterr().err
