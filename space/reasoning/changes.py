@@ -44,13 +44,14 @@ class ChangeLog:
         by_rules: tuple[list[Triple], list[Triple]] = ([], [])
         inferred: tuple[list[Triple], list[Triple]] = ([], [])
         functors, triples, asserted = self._terms.functors, self._store.triples, self._asserted
+        decode = self._terms.triple
         for t, (was_present, was_asserted) in self._before.items():
             if t[2] in functors:
                 continue
             is_present, is_asserted = t in triples, t in asserted
             if is_present == was_present and is_asserted == was_asserted:
                 continue
-            triple = self._decode(t)
+            triple = decode(t)
             if is_present != was_present:
                 now = is_asserted if is_present else was_asserted
                 change = Change(triple, Origin.ASSERTED if now else Origin.INFERRED)
@@ -69,7 +70,3 @@ class ChangeLog:
             inferred_removed=tuple(inferred[1]),
             firings=firings,
         )
-
-    def _decode(self, t: T) -> Triple:
-        term = self._terms.term
-        return (term(t[0]), term(t[1]), term(t[2]))  # type: ignore[return-value]

@@ -189,8 +189,7 @@ class RuleEngine:
         return (term(s), term(p), term(o))
 
     def _decode(self, t: T) -> Triple:
-        term = self.terms.term
-        return (term(t[0]), term(t[1]), term(t[2]))  # type: ignore[return-value]
+        return self.terms.triple(t)  # type: ignore[return-value]
 
     def _assert(self, triples: Iterable[T], by: tuple[int, tuple[T, ...]] | None) -> None:
         """Assert triples and propagate through the monotonic rules."""

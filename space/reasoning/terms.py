@@ -73,6 +73,11 @@ class TermTable:
         """Return the term of an id."""
         return self._terms[i]
 
+    def triple(self, t: tuple[int, int, int]) -> tuple[Value, Value, Value]:
+        """Return the terms of an encoded triple."""
+        terms = self._terms
+        return (terms[t[0]], terms[t[1]], terms[t[2]])
+
     def same_value(self, a: int, b: int) -> bool:
         """Tell whether two terms are equal by value (`1` equals `1.0`)."""
         return a == b or self.keys[a] == self.keys[b]
