@@ -113,3 +113,27 @@ def test_kill_9_then_restart_answers_again_without_duplicating_conclusions(ts, l
         )
         > before
     )
+
+
+def test_the_whole_robot_goes_to_charge_and_back_to_its_patient(ts, launch):
+    """All four agents: very low battery while attending a patient, then charged, back to work."""
+    launch.start("reasoner", "--robot-file", str(HOSPITAL))
+    wait_for(lambda: value(ts, AC.robot1, AC.current_task) == AC.task_idle)
+    ts.write([(AC.robot1_battery, AC.charge_percent, Literal(16))])
+    for agent in ("hw_monitor", "nav_monitor", "behavior"):
+        launch.start(agent, "--time-scale", "80")
+    ts.write(
+        [
+            (AC.robot1, AC.attended_person, AC.patient_jon),
+            (AC.robot1, AC.requested_task, AC.task_attending_patient),
+        ]
+    )
+    wait_for(lambda: value(ts, AC.robot1, AC.location) == AC.room_102, 20)
+    # Jon uses a wheelchair: the robot drives slowly with him.
+    assert value(ts, AC.robot1_base, AC.motion_speed) == Literal("low")
+    wait_for(lambda: value(ts, AC.robot1_battery, AC.battery_level) == Literal("very low"), 30)
+    wait_for(lambda: value(ts, AC.robot1, AC.current_task) == AC.task_charging, 30)
+    assert value(ts, AC.robot1, AC.location) == AC.dock1
+    wait_for(lambda: value(ts, AC.robot1, AC.current_task) == AC.task_attending_patient, 60)
+    wait_for(lambda: value(ts, AC.robot1, AC.location) == AC.room_102, 20)
+    assert value(ts, AC.robot1_speakers, AC.running_mode) == Literal("active")
