@@ -189,6 +189,7 @@ class Deployment:
             if self.scenario is not None:
                 status = self._tick_scenario(ts, self.scenario)
                 if status is not None:
+                    self.view.show(self._frame(), final=True)
                     return status
             # Reading the robots copies the graph: only when it changed, or to
             # refresh process states once a second.

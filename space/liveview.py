@@ -90,10 +90,10 @@ class LiveView:
             if not self._redraw:
                 print(f"tspace up: {line}", file=self._err, flush=True)
 
-    def show(self, frame: Frame) -> None:
-        """Redraw (at most every REDRAW_EVERY s) or log what changed since last time."""
+    def show(self, frame: Frame, final: bool = False) -> None:
+        """Redraw (at most every REDRAW_EVERY s unless `final`) or log what changed."""
         if self._redraw:
-            self._draw(frame)
+            self._draw(frame, final)
         else:
             self._log(frame)
 
@@ -122,9 +122,9 @@ class LiveView:
             self._out.write("".join(f"{line}\n" for line in lines))
             self._out.flush()
 
-    def _draw(self, frame: Frame) -> None:
+    def _draw(self, frame: Frame, final: bool) -> None:
         now = time.monotonic()
-        if now - self._last_draw < REDRAW_EVERY:
+        if now - self._last_draw < REDRAW_EVERY and not final:
             return
         self._last_draw = now
         width, height = shutil.get_terminal_size()
