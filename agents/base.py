@@ -65,6 +65,7 @@ class Agent:
 
     Attributes:
         kind: the agent's kind, the first part of its default name.
+        per_robot: False for agents serving the whole space (named just `kind`).
         args: the parsed command line.
         robot: the robot this agent serves.
         name: the agent's name in logs, liveliness and changesets.
@@ -73,11 +74,13 @@ class Agent:
     """
 
     kind: ClassVar[str] = "agent"
+    per_robot: ClassVar[bool] = True
 
     def __init__(self, args: argparse.Namespace) -> None:
         self.args = args
         self.robot = robot_iri(args.robot)
-        self.name: str = args.name or f"{self.kind}.{local_name(self.robot)}"
+        default = f"{self.kind}.{local_name(self.robot)}" if self.per_robot else self.kind
+        self.name: str = args.name or default
         self.log = logging.getLogger(self.name)
         self.clock = SimClock(args.time_scale)
         self.view = View()
@@ -236,7 +239,7 @@ def build_parser(cls: type[Agent]) -> argparse.ArgumentParser:
     parser.add_argument(
         "--robot", default="robot1", help="the robot served: IRI, ac:name or name (default robot1)"
     )
-    parser.add_argument("--name", help="the agent's name (default KIND.ROBOT)")
+    parser.add_argument("--name", help="the agent's name (default KIND.ROBOT, or KIND)")
     parser.add_argument(
         "--time-scale",
         type=float,

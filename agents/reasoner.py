@@ -37,6 +37,7 @@ class Reasoner(Agent):
     """Apply the self-configuration rules to every change of the space."""
 
     kind = "reasoner"
+    per_robot = False
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)
