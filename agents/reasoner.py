@@ -98,9 +98,13 @@ class Reasoner(Agent):
         assert self.ts is not None
         engine = self._build()
         subscription = self.ts.subscribe(None, self._inbox.put, timeout=self.args.timeout)
-        self._seed()
-        asserted = set(self.ts.query(None, graph="asserted", timeout=self.args.timeout))
-        inferred = set(self.ts.query(None, graph="inferred", timeout=self.args.timeout))
+        try:
+            self._seed()
+            asserted = set(self.ts.query(None, graph="asserted", timeout=self.args.timeout))
+            inferred = set(self.ts.query(None, graph="inferred", timeout=self.args.timeout))
+        except BaseException:
+            self.ts.unsubscribe(subscription)  # setup() may retry: no second delivery
+            raise
         self.firings.restore(asserted)
         delta = engine.load(t for t in asserted if not is_record(t))
         self.engine = engine
