@@ -100,27 +100,29 @@ class Agent:
     def setup(self) -> None:
         """Open the space, declare liveliness, subscribe with a snapshot.
 
-        Blocks until the store answers, retrying for `--wait` seconds (a store
-        started at the same time may not be up yet) or until `stop()`.
+        Blocks until a router and the store answer, retrying for `--wait`
+        seconds (agents may start before `tspace serve`) or until `stop()`.
 
         Raises:
-            SpaceUnavailable: no router, or no store within `--wait` seconds.
+            SpaceUnavailable: no router or no store within `--wait` seconds.
         """
-        self.ts = TripleSpace.open(
-            self.args.connect, space=self.args.space, agent=self.name, config_file=self.args.config
-        )
-        self._token = declare_agent(self.ts.session, self.ts.space, self.name)
         deadline = time.monotonic() + self.args.wait
         while True:
             try:
+                if self.ts is None:
+                    self.ts = TripleSpace.open(
+                        self.args.connect,
+                        space=self.args.space,
+                        agent=self.name,
+                        config_file=self.args.config,
+                    )
+                    self._token = declare_agent(self.ts.session, self.ts.space, self.name)
                 self._subscription = self.subscribe()
                 break
             except (SpaceUnavailable, SpaceTimeout) as exc:
                 if time.monotonic() >= deadline or self._stop.is_set():
-                    raise SpaceUnavailable(
-                        f"no store answered in {self.args.wait} s: {exc}"
-                    ) from exc
-                self.log.info("waiting for the store: %s", exc)
+                    raise SpaceUnavailable(f"no store within {self.args.wait} s: {exc}") from exc
+                self.log.info("waiting for the space: %s", exc)
                 self._stop.wait(0.5)
         self.log.info("connected to space %r as %s", self.ts.space, self.name)
 

@@ -33,6 +33,7 @@ class HwMonitor(Agent):
         self.battery = Battery(args.charge)
         self._injected: dict[URIRef, str] = {}
         self._refused: dict[tuple[URIRef, str], str] = {}
+        self._rng = random.Random(args.seed)
         self._last = 0.0
 
     @classmethod
@@ -55,10 +56,18 @@ class HwMonitor(Agent):
         parser.add_argument("--seed", type=int, help="random seed of the fault simulation")
 
     def on_start(self) -> None:
-        """Create a driver per device, in the state the space last reported."""
-        rng = random.Random(self.args.seed)
+        """Start the simulation clock and meet the devices the space knows."""
+        self._last = self.clock.now()
+        self._discover()
+
+    def _discover(self) -> None:
+        """Create a driver per new device, in the state the space last reported.
+
+        Called every tick: a robot written into the space after this agent
+        started gets its drivers then.
+        """
         for device in self.view.objects(self.robot, AC.has_device):
-            if not isinstance(device, URIRef):
+            if not isinstance(device, URIRef) or device in self.drivers:
                 continue
             mode = self.view.text(device, AC.actual_mode) or "active"
             fault = self.view.text(device, AC.fault) or "none"
@@ -67,19 +76,19 @@ class HwMonitor(Agent):
                 mode if mode in MODES else "active",
                 fault if fault in FAULTS else "none",
                 fault_rate=rate,
-                rng=rng,
+                rng=self._rng,
             )
             self._injected[device] = self.view.text(device, AC.simulate_fault) or "none"
-        battery = self.view.device(self.robot, AC.Battery)
-        charge = self.view.number(battery, AC.charge_percent)
-        if charge is not None:
-            self.battery.percent = charge
-        self._last = self.clock.now()
-        self.log.info("%d devices, battery at %.0f %%", len(self.drivers), self.battery.percent)
-        self.set_values(self._readings())
+            self.log.info("driver for %s (%s, fault %s)", device, mode, fault)
+            if self.view.has_type(device, AC.Battery):
+                charge = self.view.number(device, AC.charge_percent)
+                if charge is not None:
+                    self.battery.percent = charge
+                self.log.info("battery at %.0f %%", self.battery.percent)
 
     def tick(self) -> None:
         """Obey commands, advance the drivers and the battery, publish what changed."""
+        self._discover()
         now = self.clock.now()
         dt, self._last = now - self._last, now
         for device, driver in self.drivers.items():

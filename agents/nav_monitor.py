@@ -40,34 +40,50 @@ class NavMonitor(Agent):
         self.base = Base()
         self.places: dict[URIRef, tuple[float, float]] = {}
         self.target: URIRef | None = None
+        self._placed = False
         self._last = 0.0
 
     def on_start(self) -> None:
-        """Read the map and put the base where the space last saw the robot."""
-        for place in self.view.graph.subjects(AC.map_x, None):
-            x, y = self.view.number(place, AC.map_x), self.view.number(place, AC.map_y)
-            if isinstance(place, URIRef) and x is not None and y is not None:
-                self.places[place] = (x, y)
-        x = self.view.number(self.robot, AC.position_x)
-        y = self.view.number(self.robot, AC.position_y)
-        location = self.view.value(self.robot, AC.location)
-        if x is not None and y is not None:
-            self.base.x, self.base.y = x, y
-        elif location in self.places:
-            self.base.x, self.base.y = self.places[location]  # type: ignore[index]
+        """Start the simulation clock."""
         self._last = self.clock.now()
-        where = (self.base.x, self.base.y)
-        self.log.info("%d places; robot at (%.1f, %.1f)", len(self.places), *where)
 
     def tick(self) -> None:
         """Follow the commanded target, speed and enablement; publish what changed."""
         now = self.clock.now()
         dt, self._last = now - self._last, now
+        self.places = self._map()
+        if not self._placed and not self._place():
+            return
         self.base.enabled = self._enabled()
         self.base.max_speed = self._max_speed()
         self._follow(self._target())
         self.base.step(dt)
         self.set_values(self._readings())
+
+    def _map(self) -> dict[URIRef, tuple[float, float]]:
+        """Return the places of the map (read every tick: the map may be written late)."""
+        places = {}
+        for place in self.view.graph.subjects(AC.map_x, None):
+            x, y = self.view.number(place, AC.map_x), self.view.number(place, AC.map_y)
+            if isinstance(place, URIRef) and x is not None and y is not None:
+                places[place] = (x, y)
+        return places
+
+    def _place(self) -> bool:
+        """Put the base where the space last saw the robot; False while it says nothing."""
+        x = self.view.number(self.robot, AC.position_x)
+        y = self.view.number(self.robot, AC.position_y)
+        location = self.view.value(self.robot, AC.location)
+        if x is not None and y is not None:
+            self.base.x, self.base.y = x, y
+        elif isinstance(location, URIRef) and location in self.places:
+            self.base.x, self.base.y = self.places[location]
+        else:
+            return False
+        self._placed = True
+        where = (self.base.x, self.base.y)
+        self.log.info("%d places; robot at (%.1f, %.1f)", len(self.places), *where)
+        return True
 
     def _target(self) -> URIRef | None:
         target = self.view.value(self.robot, AC.target_place)

@@ -6,7 +6,8 @@ import pytest
 from agentprocs import AgentProcess, Launcher, knowledge, value
 from rdflib import Literal, Namespace
 
-from conftest import AC_NS, tspace_cmd, wait_for
+from conftest import AC_NS, Server, tspace_cmd, wait_for
+from space import TripleSpace
 
 AC = Namespace(AC_NS)
 
@@ -116,3 +117,23 @@ def test_tspace_agent_runs_an_agent(robot, server, space_name, tmp_path):
         assert proc.stop(signal.SIGINT) == 0
     finally:
         launcher.close()
+
+
+def test_agents_started_before_the_store_and_the_robot_wait_for_them(tmp_path, space_name):
+    """`tspace up` may start agents first: they wait for the store, then for the robot."""
+    late = Server(tmp_path / "data")
+    launcher = Launcher(late.endpoint, space_name, tmp_path)
+    try:
+        launcher.start("hw_monitor", "--time-scale", "20")
+        launcher.start("nav_monitor", "--time-scale", "20")
+        wait_for(lambda: "waiting for the space" in launcher.procs[1].logs())
+        late.start()
+        with TripleSpace.open(late.endpoint, space=space_name) as ts:
+            wait_for(lambda: "connected to space" in launcher.procs[1].logs())
+            ts.write(knowledge())
+            ts.write([(AC.robot1, AC.target_place, AC.corridor)])
+            wait_for(lambda: state(ts, AC.location) == AC.corridor)
+            wait_for(lambda: state(ts, AC.actual_mode, AC.robot1_laser) == Literal("active"))
+    finally:
+        launcher.close()
+        late.stop()
