@@ -3,13 +3,12 @@
 The live view, the scenario checker and the HMI all need the whole robot state
 at once and a way to wait for it to change; they read this copy instead of
 querying the store on every refresh. Changes arrive on the client library's
-dispatcher thread (never a Zenoh callback); readers wait on `wait_change`.
+dispatcher thread (never a Zenoh callback); `watch` reacts to each one.
 """
 
 from __future__ import annotations
 
 import threading
-import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -21,7 +20,7 @@ from rdflib import Graph
 from space.terms import Triple
 
 if TYPE_CHECKING:
-    from space import Change, TripleSpace
+    from space import Change, Subscription, TripleSpace
 
 
 @dataclass(frozen=True)
@@ -73,8 +72,8 @@ class SpaceMirror:
         self._snapshot = Graph()
         self._recent: deque[ChangeRecord] = deque(maxlen=history)
         self._version = 0
-        self._changed = threading.Condition()
-        self._subscription: object | None = None
+        self._lock = threading.Lock()
+        self._subscription: Subscription | None = None
         self._space: TripleSpace | None = None
         self._watchers: list[Callable[[], None]] = []
 
@@ -90,7 +89,7 @@ class SpaceMirror:
         """Subscribe to everything in `ts`, starting from its current state.
 
         Blocks until the snapshot subscription is declared; the snapshot itself
-        arrives on the dispatcher thread (see `wait_change`).
+        arrives on the dispatcher thread, then `version` becomes 1.
         """
         self._space = ts
         self._subscription = ts.subscribe((None, None, None), self._on_change, snapshot=True)
@@ -101,54 +100,37 @@ class SpaceMirror:
             self._space.unsubscribe(self._subscription)
         self._subscription = None
         self._space = None
-        with self._changed:
-            self._changed.notify_all()
 
     def _on_change(self, change: Change) -> None:
-        with self._changed:
-            if self._version == 0:
-                # The snapshot merges both graphs: keep its triples apart until a
-                # later change says which graph they were in by removing them.
-                for triple in change.added:
-                    self._snapshot.add(triple)
-            else:
-                for triple in change.added:
-                    self._asserted.add(triple)
+        with self._lock:
+            # Removals first, as the store applies them.
             for triple in (*change.removed, *change.inferred_removed):
                 self._snapshot.remove(triple)
             for triple in change.removed:
                 self._asserted.remove(triple)
             for triple in change.inferred_removed:
                 self._inferred.remove(triple)
+            # The snapshot merges both graphs: keep its triples apart until a later
+            # change removes them from whichever graph they were in.
+            for triple in change.added:
+                (self._snapshot if self._version == 0 else self._asserted).add(triple)
             for triple in change.inferred_added:
                 self._inferred.add(triple)
             self._recent.append(ChangeRecord.of(change))
             self._version += 1
-            self._changed.notify_all()
         for watcher in self._watchers:
             watcher()
 
     @property
     def version(self) -> int:
         """Return how many changesets (the snapshot included) have been applied."""
-        with self._changed:
-            return self._version
-
-    def wait_change(self, after: int, timeout: float) -> int:
-        """Block until the version is above `after` or `timeout` passes; return the version."""
-        deadline = time.monotonic() + timeout
-        with self._changed:
-            while self._version <= after:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    break
-                self._changed.wait(left)
+        with self._lock:
             return self._version
 
     def graph(self) -> Graph:
         """Return a copy of the union of asserted and inferred triples."""
         union = Graph()
-        with self._changed:
+        with self._lock:
             for triple in self._asserted:
                 union.add(triple)
             for triple in self._inferred:
@@ -159,5 +141,5 @@ class SpaceMirror:
 
     def recent(self) -> list[ChangeRecord]:
         """Return the remembered changesets, oldest first."""
-        with self._changed:
+        with self._lock:
             return list(self._recent)
