@@ -257,7 +257,7 @@ def build_parser(cls: type[Agent]) -> argparse.ArgumentParser:
         type=float,
         default=30.0,
         metavar="SECONDS",
-        help="how long to wait for the store at start (default 30)",
+        help="how long to wait for a router and the store at start (default 30)",
     )
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     cls.add_arguments(parser)
