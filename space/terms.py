@@ -38,6 +38,7 @@ def _unescape(text: str) -> str:
     return _UNESCAPE_RE.sub(one, text)
 
 
+@lru_cache(maxsize=65536)
 def to_nt(term: Node) -> str:
     """Return the N-Triples text of an rdflib term."""
     if isinstance(term, URIRef):

@@ -124,7 +124,10 @@ class StoreServer:
                     item = self._queue.get_nowait()
                 except queue.Empty:
                     break
-            self._handle(batch)
+            try:
+                self._handle(batch)
+            except Exception:  # a bug must not stop the store; the requests time out
+                log.exception("store worker failed on a batch of %d request(s)", len(batch))
             if item is None:
                 return
 
@@ -166,18 +169,15 @@ class StoreServer:
                 ack = {"id": net.id if net else "", "seq": net.seq if net else state.seq}
                 _reply(req, pack(ack))
                 req.query.drop()
+        payloads = iter(c.payload for c in commits)
         for _req, net, state in pending:
             if net is not None:
-                self._publish(state, net)
+                self._publish(state, net, next(payloads))
 
-    def _publish(self, state: SpaceState, net: Changeset) -> None:
+    def _publish(self, state: SpaceState, net: Changeset, payload: bytes) -> None:
         s = self.session
         block = zenoh.CongestionControl.BLOCK
-        s.put(
-            keys.service_key(state.name, "changes", self.root),
-            net.encode(),
-            congestion_control=block,
-        )
+        s.put(keys.service_key(state.name, "changes", self.root), payload, congestion_control=block)
         meta = pack({"id": net.id, "seq": net.seq})
         for graph, removed, added in (
             (keys.ASSERTED, net.removed, net.added),
