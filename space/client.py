@@ -214,9 +214,8 @@ class TripleSpace:
 
     def _graph(self, reply: dict) -> Graph:
         graph = Graph()
-        for name in (keys.ASSERTED, keys.INFERRED):
-            for t in reply.get(name) or ():
-                graph.add(triple_from_nt(t))
+        for t in _triples(reply):
+            graph.add(t)
         for name, ns in self.prefixes.as_dict().items():
             graph.bind(name, ns, override=True)
         return graph
@@ -234,6 +233,14 @@ class TripleSpace:
         return self._graph(
             self._ask({"op": "query", "template": t.to_wire(), "graph": graph}, timeout)
         )
+
+    def match(
+        self, template: TemplateLike = None, *, graph: str = "all", timeout: float = 5.0
+    ) -> list[Triple]:
+        """Return the matching triples as a list: `query` without building a Graph (faster)."""
+        t = self._template(template)
+        reply = self._ask({"op": "query", "template": t.to_wire(), "graph": graph}, timeout)
+        return list(dict.fromkeys(_triples(reply)))
 
     def take(self, template: TemplateLike = None, *, timeout: float = 5.0) -> Graph:
         """Remove every matching asserted triple and return them, atomically at the store."""
@@ -339,6 +346,12 @@ class TripleSpace:
             what="log request",
         )
         return [bytes(p) for p in reply.get("changes") or ()]
+
+
+def _triples(reply: dict) -> Iterator[Triple]:
+    for name in (keys.ASSERTED, keys.INFERRED):
+        for t in reply.get(name) or ():
+            yield triple_from_nt(t)
 
 
 class Transaction:

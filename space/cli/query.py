@@ -46,8 +46,8 @@ def run(args: argparse.Namespace) -> int:
             from space.template import Template
 
             template = Template.parse(args.template, prefixes)
-            graph = ts.query(template, graph=args.graph, timeout=args.timeout)
-            print_template(template, graph, prefixes, args.format, sys.stdout)
+            triples = ts.match(template, graph=args.graph, timeout=args.timeout)
+            print_template(template, triples, prefixes, args.format, sys.stdout)
         else:
             text = sys.stdin.read() if args.sparql == "-" else args.sparql
             result = ts.query_sparql(text, timeout=args.timeout)

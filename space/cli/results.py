@@ -11,6 +11,7 @@ from space.display import sparql_json, table
 from space.errors import InputError
 from space.prefixes import PrefixMap
 from space.template import Template
+from space.terms import Triple
 
 
 def print_graph(graph: Graph, prefixes: PrefixMap, out: TextIO) -> None:
@@ -21,17 +22,20 @@ def print_graph(graph: Graph, prefixes: PrefixMap, out: TextIO) -> None:
 
 
 def print_template(
-    template: Template, graph: Graph, prefixes: PrefixMap, fmt: str, out: TextIO
+    template: Template, triples: list[Triple], prefixes: PrefixMap, fmt: str, out: TextIO
 ) -> None:
     """Write the triples matching a template as a table of bindings, JSON results or Turtle."""
     if fmt == "turtle":
+        graph = Graph()
+        for t in triples:
+            graph.add(t)
         print_graph(graph, prefixes, out)
         return
     names = list(dict.fromkeys(template.variables()))
     if names:
-        rows = sorted({tuple(b[n] for n in names) for t in graph if (b := template.match(t))})
+        rows = sorted({tuple(b[n] for n in names) for t in triples if (b := template.match(t))})
     else:
-        names, rows = ["s", "p", "o"], sorted(graph)
+        names, rows = ["s", "p", "o"], sorted(triples)
     if fmt == "json":
         out.write(sparql_json(names, rows) + "\n")
     else:
