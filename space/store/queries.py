@@ -77,7 +77,7 @@ def _sparql(state: SpaceState, text: object) -> dict:
     if not isinstance(text, str) or not text.strip():
         raise MalformedPayload("a SPARQL request needs its text")
     try:
-        result = state.dataset.query(text, initNs=state.prefixes.as_dict())
+        result = state.union.query(text, initNs=state.prefixes.as_dict())
         if result.type in ("CONSTRUCT", "DESCRIBE"):
             graph = result.graph if result.graph is not None else Graph()
             body = graph.serialize(format="nt", encoding="utf-8")

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from rdflib import Dataset, Graph, URIRef
+from rdflib import Graph
+from rdflib.graph import ReadOnlyGraphAggregate
 from rdflib.namespace import OWL, RDF
 from rdflib.term import Node
 
@@ -21,8 +22,6 @@ from space.store.db import Commit
 from space.template import Template
 from space.terms import Triple, from_nt, to_nt
 
-_GRAPH_IRIS = {ASSERTED: URIRef("urn:tspace:asserted"), INFERRED: URIRef("urn:tspace:inferred")}
-
 
 class SpaceState:
     """The state of one space: an asserted and an inferred graph, and its sequence number."""
@@ -31,10 +30,9 @@ class SpaceState:
         self.name = name
         self.seq = 0
         self.prefixes = PrefixMap()
-        self.dataset = Dataset(default_union=True)
-        self.graphs: dict[str, Graph] = {
-            g: self.dataset.graph(iri) for g, iri in _GRAPH_IRIS.items()
-        }
+        # Two plain graphs (cheaper to update than a Dataset); SPARQL reads their union.
+        self.graphs: dict[str, Graph] = {ASSERTED: Graph(), INFERRED: Graph()}
+        self.union = ReadOnlyGraphAggregate(list(self.graphs.values()))
         self._stamps: dict[tuple[Node, Node], str] = {}
         self._functional: set[Node] = set()
 
@@ -48,7 +46,9 @@ class SpaceState:
         self._functional = self._functional_properties()
 
     def _functional_properties(self) -> set[Node]:
-        return set(self.dataset.subjects(RDF.type, OWL.FunctionalProperty))
+        return {
+            s for g in self.graphs.values() for s in g.subjects(RDF.type, OWL.FunctionalProperty)
+        }
 
     def apply(self, cs: Changeset) -> tuple[Changeset, Commit] | None:
         """Apply a changeset; return the net changeset (with its seq) and its database commit.
