@@ -9,7 +9,7 @@ from rdflib import BNode, Literal, URIRef
 from rdflib.term import Node
 
 from space.prefixes import PrefixMap
-from space.terms import Triple
+from space.terms import Triple, to_nt
 
 
 def term_text(term: Node | None, prefixes: PrefixMap) -> str:
@@ -19,9 +19,10 @@ def term_text(term: Node | None, prefixes: PrefixMap) -> str:
     if isinstance(term, URIRef):
         return prefixes.compact(str(term)) or f"<{term}>"
     if isinstance(term, Literal) and term.datatype is not None and not term.language:
-        dt = prefixes.compact(str(term.datatype)) or f"<{term.datatype}>"
-        return f"{Literal(str(term)).n3()}^^{dt}"
-    return term.n3()
+        nt = to_nt(term)
+        dt = prefixes.compact(str(term.datatype))
+        return f"{nt[: nt.rindex('^^')]}^^{dt}" if dt else nt
+    return to_nt(term)
 
 
 def triple_text(triple: Triple, prefixes: PrefixMap) -> str:
@@ -29,9 +30,17 @@ def triple_text(triple: Triple, prefixes: PrefixMap) -> str:
     return " ".join(term_text(t, prefixes) for t in triple)
 
 
-def table(header: Sequence[str], rows: Iterable[Sequence[Node | None]], prefixes: PrefixMap) -> str:
-    """Return an aligned text table of terms."""
+def table(
+    header: Sequence[str],
+    rows: Iterable[Sequence[Node | None]],
+    prefixes: PrefixMap,
+    *,
+    sort: bool = False,
+) -> str:
+    """Return an aligned text table of terms, rows sorted by their text if `sort`."""
     cells = [[term_text(t, prefixes) for t in row] for row in rows]
+    if sort:
+        cells.sort()
     widths = [max([len(h), *(len(r[i]) for r in cells)]) for i, h in enumerate(header)]
     lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True)).rstrip()]
     lines.append("  ".join("-" * w for w in widths))

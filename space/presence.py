@@ -10,8 +10,13 @@ from space import keys
 
 
 def agent_key(space: str, name: str, root: str = keys.ROOT) -> str:
-    """Return the liveliness key of an agent."""
+    """Return the liveliness key of an agent (its name escaped like a key chunk)."""
     return f"{root}/{space}/@agents/{keys.escape(name)}"
+
+
+def agents_key(space: str, root: str = keys.ROOT) -> str:
+    """Return the key expression that matches every agent of a space."""
+    return f"{root}/{space}/@agents/*"
 
 
 def declare_agent(session: zenoh.Session, space: str, name: str) -> zenoh.LivelinessToken:
@@ -22,7 +27,7 @@ def declare_agent(session: zenoh.Session, space: str, name: str) -> zenoh.Liveli
 def alive_agents(session: zenoh.Session, space: str, timeout: float = 2.0) -> list[str]:
     """Return the names of the agents alive in `space` now."""
     names = []
-    for reply in session.liveliness().get(agent_key(space, "*"), timeout=timeout):
+    for reply in session.liveliness().get(agents_key(space), timeout=timeout):
         if reply.ok is not None:
             names.append(keys.unescape(str(reply.ok.key_expr).rsplit("/", 1)[1]))
     return sorted(names)
@@ -40,4 +45,4 @@ def watch_agents(
         name = keys.unescape(str(sample.key_expr).rsplit("/", 1)[1])
         callback(name, sample.kind == zenoh.SampleKind.PUT)
 
-    return session.liveliness().declare_subscriber(agent_key(space, "*"), on_sample, history=True)
+    return session.liveliness().declare_subscriber(agents_key(space), on_sample, history=True)

@@ -33,13 +33,13 @@ def print_template(
         return
     names = list(dict.fromkeys(template.variables()))
     if names:
-        rows = sorted({tuple(b[n] for n in names) for t in triples if (b := template.match(t))})
+        rows = list({tuple(b[n] for n in names) for t in triples if (b := template.match(t))})
     else:
-        names, rows = ["s", "p", "o"], sorted(triples)
+        names, rows = ["s", "p", "o"], list(triples)
     if fmt == "json":
         out.write(sparql_json(names, rows) + "\n")
     else:
-        out.write(table(names, rows, prefixes) + "\n")
+        out.write(table(names, rows, prefixes, sort=True) + "\n")
 
 
 def print_sparql(result: Result, prefixes: PrefixMap, fmt: str, out: TextIO) -> None:
@@ -54,8 +54,7 @@ def print_sparql(result: Result, prefixes: PrefixMap, fmt: str, out: TextIO) -> 
         if fmt == "turtle" or result.graph is None:
             print_graph(result.graph or Graph(), prefixes, out)
         else:
-            rows = sorted(result.graph)
-            out.write(table(["s", "p", "o"], rows, prefixes) + "\n")
+            out.write(table(["s", "p", "o"], list(result.graph), prefixes, sort=True) + "\n")
         return
     if fmt == "turtle":
         raise InputError(f"a {result.type} result is not a graph: use --format table or json")

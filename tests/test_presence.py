@@ -1,0 +1,26 @@
+"""Presence: agents are seen alive while their liveliness token lives, and gone after."""
+
+from conftest import wait_for
+from space.presence import alive_agents, declare_agent, watch_agents
+
+
+def test_agents_come_and_go(ts, space_name):
+    events: list[tuple[str, bool]] = []
+    watcher = watch_agents(ts.session, space_name, lambda n, alive: events.append((n, alive)))
+    try:
+        token = declare_agent(ts.session, space_name, "hw_monitor.robot1")
+        wait_for(lambda: ("hw_monitor.robot1", True) in events, what="the agent's arrival")
+        assert alive_agents(ts.session, space_name) == ["hw_monitor.robot1"]
+        token.undeclare()
+        wait_for(lambda: ("hw_monitor.robot1", False) in events, what="the agent's departure")
+        assert alive_agents(ts.session, space_name) == []
+    finally:
+        watcher.undeclare()
+
+
+def test_agent_of_another_space_is_not_seen(ts, space_name):
+    token = declare_agent(ts.session, space_name + "other", "reasoner")
+    try:
+        assert alive_agents(ts.session, space_name) == []
+    finally:
+        token.undeclare()
