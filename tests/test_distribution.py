@@ -48,7 +48,8 @@ def stop(proc: subprocess.Popen) -> None:
 
 
 def test_late_joiner_sees_state_then_every_change_without_gap_or_duplicate(server, space_name):
-    writer = program("writer.py", server.endpoint, space_name, "300")
+    # 300 changesets over about 3 s, so the subscriber joins while they are being written
+    writer = program("writer.py", server.endpoint, space_name, "300", "0.01")
     out = Lines(writer)
     sub = None
     try:
