@@ -63,22 +63,6 @@ class SpaceState:
         new_prefixes = self.prefixes.update(cs.prefixes)
         if not (removed or added or i_removed or i_added or new_prefixes):
             return None
-        for graph, rem, add in ((asserted, removed, added), (inferred, i_removed, i_added)):
-            for t in rem:
-                graph.remove(t)
-            for t in add:
-                graph.add(t)
-        for t in removed:
-            self._stamps.pop((t[0], t[1]), None)
-        for t in added:
-            if t[1] in self._functional:
-                self._stamps[(t[0], t[1])] = stamp
-        if any(
-            t[1] == RDF.type and t[2] == OWL.FunctionalProperty
-            for t in (*removed, *added, *i_removed, *i_added)
-        ):
-            self._functional = self._functional_properties()
-        self.seq += 1
         net = Changeset(
             id=cs.id,
             agent=cs.agent,
@@ -89,16 +73,48 @@ class SpaceState:
             inferred_added=i_added,
             inferred_removed=i_removed,
             prefixes=new_prefixes,
-            seq=self.seq,
+            seq=self.seq + 1,
         )
-        commit = Commit(space=self.name, seq=self.seq, payload=net.encode(), prefixes=new_prefixes)
-        commit.removed = [(ASSERTED, _row(t)) for t in removed] + [
-            (INFERRED, _row(t)) for t in i_removed
+        return net, self.install(net)
+
+    def install(self, net: Changeset, payload: bytes | None = None) -> Commit:
+        """Apply a net changeset exactly as given and take its seq; return its database commit.
+
+        `apply` ends here; a follower store installs the leader's net changesets directly.
+        """
+        asserted, inferred = self.graphs[ASSERTED], self.graphs[INFERRED]
+        self.prefixes.update(net.prefixes)
+        for graph, rem, add in (
+            (asserted, net.removed, net.added),
+            (inferred, net.inferred_removed, net.inferred_added),
+        ):
+            for t in rem:
+                graph.remove(t)
+            for t in add:
+                graph.add(t)
+        every = (*net.removed, *net.added, *net.inferred_removed, *net.inferred_added)
+        if any(t[1] == RDF.type and t[2] == OWL.FunctionalProperty for t in every):
+            self._functional = self._functional_properties()
+        for t in net.removed:
+            self._stamps.pop((t[0], t[1]), None)
+        stamped = []
+        for t in net.added:
+            stamp = net.timestamp if t[1] in self._functional else ""
+            if stamp:
+                self._stamps[(t[0], t[1])] = stamp
+            stamped.append((ASSERTED, _row(t), stamp))
+        self.seq = net.seq
+        commit = Commit(
+            space=self.name,
+            seq=net.seq,
+            payload=payload if payload is not None else net.encode(),
+            prefixes=net.prefixes,
+        )
+        commit.removed = [(ASSERTED, _row(t)) for t in net.removed] + [
+            (INFERRED, _row(t)) for t in net.inferred_removed
         ]
-        commit.added = [
-            (ASSERTED, _row(t), stamp if t[1] in self._functional else "") for t in added
-        ] + [(INFERRED, _row(t), "") for t in i_added]
-        return net, commit
+        commit.added = stamped + [(INFERRED, _row(t), "") for t in net.inferred_added]
+        return commit
 
     def _functional_additions(self, added: list[Triple], stamp: str) -> _Additions:
         """Split additions into those kept and the old values they replace."""
