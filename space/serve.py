@@ -34,7 +34,13 @@ def open_server(
     session = zenoh.open(conf)
     try:
         listener = session.info.declare_transport_events_listener(_log_transport)
-        server = StoreServer(session, data_dir or default_data_dir(), durable=durable)
+        # Meshed with other routers, a store first looks a while for a leading store there.
+        server = StoreServer(
+            session,
+            data_dir or default_data_dir(),
+            durable=durable,
+            look_for_leader=2.0 if connect else 0.0,
+        )
         if store:
             server.start()
         try:

@@ -1,8 +1,14 @@
-"""The store process's Zenoh side: queryables and subscribers of every space.
+"""The store process's Zenoh side: one worker thread serving every space.
 
 Zenoh callbacks only enqueue; one worker thread owns the state and the
 database, so changesets are applied in one order, acknowledged only once
-committed, and published (as whole changesets and as per-triple keys) after.
+committed (and, with replicas, once every follower has them), and published
+after, as whole changesets and as per-triple keys.
+
+Several stores may hold the same spaces (see docs/deployment.md): the one
+alive the longest leads (sequences writes, answers reads); the others follow
+the leader's changes, and the follower with the smallest Zenoh id takes over
+when the leader's liveliness token goes away.
 """
 
 from __future__ import annotations
@@ -10,6 +16,7 @@ from __future__ import annotations
 import logging
 import queue
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +26,8 @@ import zenoh
 from space import keys
 from space.changeset import Changeset, pack, unpack
 from space.errors import MalformedPayload, QueryError, SpaceError
+from space.request import ask_store
+from space.store.acks import AckGate
 from space.store.db import Commit, StoreDB
 from space.store.queries import answer_key_get, answer_query
 from space.store.state import SpaceState
@@ -26,11 +35,12 @@ from space.store.state import SpaceState
 log = logging.getLogger("tspace.store")
 
 _BATCH = 256
+_SERVICES = ("write", "query", "log", "keys")
 
 
 @dataclass
 class _Request:
-    kind: str  # "write", "query", "log", "keys"
+    kind: str  # a service, or "replica", "ack", "peer", "spaces"
     space: str
     payload: bytes | None
     query: zenoh.Query | None = None
@@ -51,42 +61,63 @@ class StoreServer:
         *,
         durable: bool = False,
         root: str = keys.ROOT,
+        look_for_leader: float = 0.0,
     ) -> None:
         self.session = session
+        self.look_for_leader = look_for_leader
         self.data_dir = data_dir
         self.durable = durable
         self.root = root
+        self.zid = ""
+        self.role = ""
+        self.leader = ""
         self._queue: queue.SimpleQueue[_Request | None] = queue.SimpleQueue()
         self._spaces: dict[str, SpaceState] = {}
-        self._entities: list = []
+        self._watchers: list = []
+        self._role_entities: list = []
+        self._token: zenoh.LivelinessToken | None = None
+        self._stores: set[str] = set()
+        self._acks = AckGate()
         self._db: StoreDB | None = None
         self._worker: threading.Thread | None = None
+        self._ready = threading.Event()
 
-    def start(self) -> None:
-        """Load every space from the database, then start serving."""
+    def start(self, timeout: float = 10.0) -> None:
+        """Load every space from the database, find the leader or lead, then serve.
+
+        Blocks until this store leads or has caught up with the leader.
+        """
         self._db = StoreDB(self.data_dir, durable=self.durable)
         for name in self._db.spaces():
             self._space(name)
-        root = self.root
-        s = self.session
-        self._entities = [
-            s.declare_queryable(f"{root}/*/@/write", self._on_query("write")),
-            s.declare_subscriber(f"{root}/*/@/write", self._on_put),
-            s.declare_queryable(f"{root}/*/@/query", self._on_query("query")),
-            s.declare_queryable(f"{root}/*/@/log", self._on_query("log")),
-            s.declare_queryable(f"{root}/*/{keys.ASSERTED}/**", self._on_query("keys")),
-            s.declare_queryable(f"{root}/*/{keys.INFERRED}/**", self._on_query("keys")),
-            s.liveliness().declare_token(f"{root}/@stores/{s.zid()}"),
+        self.zid = str(self.session.zid())
+        live = self.session.liveliness()
+        self._watchers = [
+            live.declare_subscriber(f"{self.root}/@stores/*", self._on_peer("store"), history=True),
+            live.declare_subscriber(
+                f"{self.root}/@leader/*", self._on_peer("leader"), history=True
+            ),
         ]
         self._worker = threading.Thread(target=self._run, name="tspace-store", daemon=True)
         self._worker.start()
-        log.info("store ready: %d space(s) from %s", len(self._spaces), self._db.path)
+        if not self._ready.wait(timeout):
+            log.warning("store not ready after %g s (still catching up)", timeout)
+        log.info(
+            "store %s %s: %d space(s) from %s",
+            self.zid,
+            self.role,
+            len(self._spaces),
+            self._db.path,
+        )
 
     def close(self) -> None:
         """Stop serving, finish queued work and close the database (no-op if not started)."""
-        for entity in reversed(self._entities):
+        for entity in reversed([*self._watchers, *self._role_entities]):
             entity.undeclare()
-        self._entities = []
+        self._watchers, self._role_entities = [], []
+        if self._token is not None:
+            self._token.undeclare()
+            self._token = None
         if self._worker is not None:
             self._queue.put(None)
             self._worker.join()
@@ -106,16 +137,32 @@ class StoreServer:
 
         return callback
 
-    def _on_put(self, sample: zenoh.Sample) -> None:
-        space = str(sample.key_expr).split("/")[1]
-        self._queue.put(_Request("write", space, sample.payload.to_bytes()))
+    def _on_sample(self, kind: str) -> Callable[[zenoh.Sample], None]:
+        def callback(sample: zenoh.Sample) -> None:
+            space = str(sample.key_expr).split("/")[1]
+            self._queue.put(_Request(kind, space, sample.payload.to_bytes()))
+
+        return callback
+
+    def _on_peer(self, what: str) -> Callable[[zenoh.Sample], None]:
+        def callback(sample: zenoh.Sample) -> None:
+            zid = str(sample.key_expr).rsplit("/", 1)[1]
+            alive = sample.kind == zenoh.SampleKind.PUT
+            self._queue.put(_Request("peer", what, pack([zid, alive])))
+
+        return callback
 
     # The worker: the only thread that touches state and database.
 
     def _run(self) -> None:
+        self._decide_role()
+        self._ready.set()
         while True:
             batch: list[_Request] = []
-            item = self._queue.get()
+            try:
+                item = self._queue.get(timeout=self._acks.wait_time())
+            except queue.Empty:
+                item = _Request("tick", "", None)
             while item is not None:
                 batch.append(item)
                 if len(batch) >= _BATCH:
@@ -126,6 +173,7 @@ class StoreServer:
                     break
             try:
                 self._handle(batch)
+                self._acks.release()
             except Exception:  # a bug must not stop the store; the requests time out
                 log.exception("store worker failed on a batch of %d request(s)", len(batch))
             if item is None:
@@ -134,30 +182,32 @@ class StoreServer:
     def _handle(self, batch: list[_Request]) -> None:
         pending: list[tuple[_Request, Changeset | None, SpaceState]] = []
         commits: list[Commit] = []
+        replicas: list[_Request] = []
         for req in batch:
+            if req.kind == "replica":
+                replicas.append(req)
+                continue
             if req.kind != "write":
                 self._flush(pending, commits)
                 pending, commits = [], []
-                self._answer(req)
+                self._other(req)
                 continue
             try:
                 keys.check_space(req.space)
                 cs = Changeset.decode(req.payload or b"")
             except (MalformedPayload, ValueError) as exc:
                 self._reject(req, exc)
-                if req.query is not None:
-                    req.query.drop()
                 continue
             state = self._space(req.space)
             if not cs.timestamp:
                 cs.timestamp = str(self.session.new_timestamp())
             result = state.apply(cs)
-            if result is None:
-                pending.append((req, None, state))
-            else:
-                pending.append((req, result[0], state))
+            pending.append((req, result[0] if result else None, state))
+            if result is not None:
                 commits.append(result[1])
         self._flush(pending, commits)
+        if replicas:
+            self._follow_changes(replicas)
 
     def _flush(self, pending: list, commits: list[Commit]) -> None:
         if not pending:
@@ -166,9 +216,11 @@ class StoreServer:
         self._db.commit(commits)
         for req, net, state in pending:
             if req.query is not None:
-                ack = {"id": net.id if net else "", "seq": net.seq if net else state.seq}
-                _reply(req, pack(ack))
-                req.query.drop()
+                seq = net.seq if net else state.seq
+                ack = pack({"id": net.id if net else "", "seq": seq})
+                if not self._acks.hold(state.name, seq, req.query, req.key, ack):
+                    req.query.reply(req.key, ack)
+                    req.query.drop()
         payloads = iter(c.payload for c in commits)
         for _req, net, state in pending:
             if net is not None:
@@ -190,30 +242,44 @@ class StoreServer:
                 key = keys.triple_key(state.name, graph, t, state.prefixes, self.root)
                 s.put(key, meta, congestion_control=block)
 
-    def _answer(self, req: _Request) -> None:
+    def _other(self, req: _Request) -> None:
+        if req.kind == "peer":
+            self._peer(req.space, *unpack(req.payload or b""))  # type: ignore[misc]
+        elif req.kind == "ack":
+            self._ack(req.payload or b"")
+        elif req.kind == "spaces":
+            reply = pack({name: state.seq for name, state in self._spaces.items()})
+            self._answer(req, lambda: reply)
+        elif req.kind in _SERVICES:
+            self._answer(req, lambda: self._service(req))
+
+    def _service(self, req: _Request) -> bytes:
+        keys.check_space(req.space)
+        state = self._space(req.space)
+        if req.kind == "keys":
+            assert req.query is not None
+            answer_key_get(state, req.query, self.root)
+            return b""
+        if req.kind == "log":
+            return self._log(state, unpack(req.payload or b""))
+        reply, take = answer_query(state, unpack(req.payload or b""))
+        if take is not None and not take.is_empty():
+            result = state.apply(take)
+            if result is not None:
+                self._flush([(_Request("write", req.space, None), result[0], state)], [result[1]])
+                reply["seq"] = result[0].seq
+        return pack(reply)
+
+    def _answer(self, req: _Request, produce: Callable[[], bytes]) -> None:
         try:
-            keys.check_space(req.space)
-            state = self._space(req.space)
-            if req.kind == "keys":
-                answer_key_get(state, req.query, self.root)
-                return
-            if req.kind == "log":
-                _reply(req, self._log(state, unpack(req.payload or b"")))
-                return
-            reply, take = answer_query(state, unpack(req.payload or b""))
-            if take is not None and not take.is_empty():
-                result = state.apply(take)
-                if result is not None:
-                    self._flush(
-                        [(_Request("write", req.space, None), result[0], state)], [result[1]]
-                    )
-                    reply["seq"] = result[0].seq
-            _reply(req, pack(reply))
+            payload = produce()
+            if payload and req.query is not None:
+                req.query.reply(req.key, payload)
         except (SpaceError, ValueError) as exc:
             self._reject(req, exc)
-        finally:
-            if req.query is not None:
-                req.query.drop()
+            return
+        if req.query is not None:
+            req.query.drop()
 
     def _log(self, state: SpaceState, request: object) -> bytes:
         if not isinstance(request, dict):
@@ -228,6 +294,7 @@ class StoreServer:
         log.warning("%s %s on space %r: %s", what, req.kind, req.space, exc)
         if req.query is not None:
             req.query.reply_err(str(exc).encode())
+            req.query.drop()
 
     def _space(self, name: str) -> SpaceState:
         state = self._spaces.get(name)
@@ -240,7 +307,147 @@ class StoreServer:
             self._spaces[name] = state
         return state
 
+    # Roles: lead, or follow the leader's changes.
 
-def _reply(req: _Request, payload: bytes) -> None:
-    if req.query is not None:
-        req.query.reply(req.key, payload)
+    def _decide_role(self) -> None:
+        """Follow a leading store if one answers within `look_for_leader` seconds, else lead."""
+        deadline = time.monotonic() + self.look_for_leader
+        while True:
+            replies = self.session.liveliness().get(f"{self.root}/@leader/*", timeout=0.5)
+            leaders = sorted(
+                zid
+                for r in replies
+                if r.ok is not None and (zid := str(r.ok.key_expr).rsplit("/", 1)[1]) != self.zid
+            )
+            if leaders:
+                self._follow(leaders[0])
+                return
+            if time.monotonic() >= deadline:
+                self._lead()
+                return
+            time.sleep(0.1)
+
+    def _declare_role(self, entities: list) -> None:
+        for entity in reversed(self._role_entities):
+            entity.undeclare()
+        self._role_entities = entities
+
+    def _lead(self) -> None:
+        root, s = self.root, self.session
+        on_query = self._on_query
+        self._declare_role(
+            [
+                s.declare_queryable(f"{root}/*/@/write", on_query("write")),
+                s.declare_subscriber(f"{root}/*/@/write", self._on_sample("write")),
+                s.declare_queryable(f"{root}/*/@/query", on_query("query")),
+                s.declare_queryable(f"{root}/*/@/log", on_query("log")),
+                s.declare_queryable(f"{root}/*/{keys.ASSERTED}/**", on_query("keys")),
+                s.declare_queryable(f"{root}/*/{keys.INFERRED}/**", on_query("keys")),
+                s.declare_queryable(f"{root}/@repl/spaces", on_query("spaces")),
+                s.declare_subscriber(f"{root}/@repl/ack", self._on_sample("ack")),
+                s.liveliness().declare_token(f"{root}/@leader/{self.zid}"),
+            ]
+        )
+        self.role, self.leader = "leading", self.zid
+        self._acks.followers = self._stores - {self.zid}
+        self._announce()
+        log.info("store %s leads", self.zid)
+
+    def _follow(self, leader: str) -> None:
+        changes = f"{self.root}/*/@/changes"
+        self._declare_role([self.session.declare_subscriber(changes, self._on_sample("replica"))])
+        self.role, self.leader = "following", leader
+        self._acks.followers = set()
+        self._catch_up()
+        self._announce()
+        log.info("store %s follows %s", self.zid, leader)
+
+    def _announce(self) -> None:
+        if self._token is None:
+            self._token = self.session.liveliness().declare_token(f"{self.root}/@stores/{self.zid}")
+        if self.role == "following":
+            self._send_acks({name: st.seq for name, st in self._spaces.items()})
+
+    def _peer(self, what: str, zid: str, alive: bool) -> None:
+        if what == "store":
+            if alive:
+                self._stores.add(zid)
+                if self.role == "leading" and zid != self.zid:
+                    self._acks.followers.add(zid)
+            else:
+                self._stores.discard(zid)
+                self._acks.forget(zid)
+            return
+        if alive and zid != self.zid:
+            if self.role == "leading" and zid < self.zid:
+                log.warning("store %s also leads; %s steps down", zid, self.zid)
+                self._follow(zid)
+            elif self.role == "following":
+                self.leader = zid
+        elif not alive and zid == self.leader and self.role == "following":
+            candidates = sorted((self._stores - {zid}) | {self.zid})
+            if candidates[0] == self.zid:
+                log.warning("leader %s is gone; store %s takes over", zid, self.zid)
+                self._lead()
+
+    def _ack(self, payload: bytes) -> None:
+        message = unpack(payload)
+        if isinstance(message, dict) and isinstance(message.get("seqs"), dict):
+            self._acks.acked(str(message.get("store")), message["seqs"])
+
+    def _send_acks(self, seqs: dict[str, int]) -> None:
+        message = pack({"store": self.zid, "seqs": seqs})
+        self.session.put(
+            f"{self.root}/@repl/ack", message, congestion_control=zenoh.CongestionControl.BLOCK
+        )
+
+    def _catch_up(self) -> None:
+        """Fetch from the leader what this store missed, space by space."""
+        try:
+            reply = ask_store(self.session, f"{self.root}/@repl/spaces", b"", 5.0, what="sync")
+        except SpaceError as exc:
+            log.warning("could not ask the leader for its spaces: %s", exc)
+            return
+        for name, seq in reply.items():
+            self._fetch(self._space(str(name)), int(seq))
+
+    def _fetch(self, state: SpaceState, last: int) -> None:
+        if last <= state.seq:
+            return
+        key = keys.service_key(state.name, "log", self.root)
+        request = pack({"from": state.seq + 1, "to": last})
+        try:
+            changes = ask_store(self.session, key, request, 10.0, what="log request")["changes"]
+        except SpaceError as exc:
+            log.warning("could not catch up %s: %s", state.name, exc)
+            return
+        self._install(state, [bytes(p) for p in changes])
+
+    def _install(self, state: SpaceState, payloads: list[bytes]) -> None:
+        commits = []
+        for payload in payloads:
+            net = Changeset.decode(payload)
+            if net.seq == state.seq + 1:
+                commits.append(state.install(net, payload))
+        if commits:
+            assert self._db is not None
+            self._db.commit(commits)
+
+    def _follow_changes(self, replicas: list[_Request]) -> None:
+        if self.role != "following":
+            return
+        touched: dict[str, int] = {}
+        for req in replicas:
+            try:
+                net = Changeset.decode(req.payload or b"")
+            except MalformedPayload as exc:
+                log.warning("malformed replicated change on %r skipped: %s", req.space, exc)
+                continue
+            state = self._space(req.space)
+            if net.seq > state.seq + 1:
+                self._fetch(state, net.seq - 1)
+            if net.seq == state.seq + 1:
+                self._install(state, [req.payload or b""])
+            touched[req.space] = state.seq
+        if touched:
+            self._send_acks(touched)

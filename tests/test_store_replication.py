@@ -1,0 +1,78 @@
+"""Two stores hold the same space: killing one loses nothing; a returning one catches up."""
+
+import signal
+
+from rdflib import Literal, Namespace
+
+from conftest import AC_NS, Server, wait_for
+from space import SpaceError, TripleSpace
+
+AC = Namespace(AC_NS)
+
+
+def _counted(ts: TripleSpace) -> set[int]:
+    return {int(o) for o in ts.query((AC.counter, AC.n, None)).objects()}
+
+
+def _answers(endpoint: str) -> bool:
+    try:
+        with TripleSpace.open(endpoint, space="rep") as ts:
+            ts.snapshot(timeout=1.0)
+        return True
+    except SpaceError:
+        return False
+
+
+def test_killing_the_leader_loses_no_acknowledged_change(tmp_path):
+    a = Server(tmp_path / "a")
+    a.start()
+    b = Server(tmp_path / "b", "--connect", a.endpoint)
+    b.start()
+    wait_for(lambda: "follows" in b.logs(), 10, "the second store to follow the first")
+    try:
+        with TripleSpace.open(b.endpoint, space="rep") as ts:
+            for i in range(50):
+                ts.write([(AC.counter, AC.n, Literal(i))])
+            a.stop(signal.SIGKILL)
+            # the follower takes over; a write made right away waits for it
+            ts.write([(AC.counter, AC.n, Literal(50))], timeout=20)
+            assert _counted(ts) == set(range(51))
+            assert ts.snapshot()[1] == 51
+
+        # the old leader comes back, follows, and catches up before answering
+        a.extra = ("--connect", b.endpoint)
+        a.start()
+        wait_for(lambda: "follows" in a.logs(), 10, "the returning store to follow")
+        with TripleSpace.open(b.endpoint, space="rep") as ts:
+            for i in range(51, 60):
+                ts.write([(AC.counter, AC.n, Literal(i))])
+        b.stop(signal.SIGKILL)
+        wait_for(lambda: _answers(a.endpoint), 20, "the returning store to take over")
+        with TripleSpace.open(a.endpoint, space="rep") as ts:
+            assert _counted(ts) == set(range(60))
+            assert ts.snapshot()[1] == 60
+    finally:
+        b.stop()
+        a.stop()
+
+
+def test_subscriber_keeps_its_order_across_a_failover(tmp_path):
+    a = Server(tmp_path / "a")
+    a.start()
+    b = Server(tmp_path / "b", "--connect", a.endpoint)
+    b.start()
+    wait_for(lambda: "follows" in b.logs(), 10, "the second store to follow the first")
+    try:
+        seen = []
+        with TripleSpace.open(b.endpoint, space="rep") as ts:
+            ts.subscribe(None, seen.append)
+            for i in range(5):
+                ts.write([(AC.counter, AC.n, Literal(i))])
+            a.stop(signal.SIGKILL)
+            for i in range(5, 10):
+                ts.write([(AC.counter, AC.n, Literal(i))], timeout=20)
+            wait_for(lambda: len(seen) >= 10, 10, "every change")
+            assert [c.seq for c in seen] == list(range(1, 11))
+    finally:
+        b.stop()
+        a.stop()
