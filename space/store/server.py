@@ -26,10 +26,10 @@ import zenoh
 from space import keys
 from space.changeset import Changeset, pack, unpack
 from space.errors import MalformedPayload, QueryError, SpaceError
-from space.request import ask_store
 from space.store.acks import AckGate
 from space.store.db import Commit, StoreDB
 from space.store.queries import answer_key_get, answer_query
+from space.store.replica import Replica
 from space.store.state import SpaceState
 
 log = logging.getLogger("tspace.store")
@@ -79,6 +79,7 @@ class StoreServer:
         self._stores: set[str] = set()
         self._acks = AckGate()
         self._db: StoreDB | None = None
+        self._replica: Replica
         self._worker: threading.Thread | None = None
         self._ready = threading.Event()
 
@@ -88,6 +89,7 @@ class StoreServer:
         Blocks until this store leads or has caught up with the leader.
         """
         self._db = StoreDB(self.data_dir, durable=self.durable)
+        self._replica = Replica(self.session, self.root, self._db, self._space)
         for name in self._db.spaces():
             self._space(name)
         self.zid = str(self.session.zid())
@@ -206,8 +208,8 @@ class StoreServer:
             if result is not None:
                 commits.append(result[1])
         self._flush(pending, commits)
-        if replicas:
-            self._follow_changes(replicas)
+        if replicas and self.role == "following":
+            self._replica.follow([(r.space, r.payload or b"") for r in replicas])
 
     def _flush(self, pending: list, commits: list[Commit]) -> None:
         if not pending:
@@ -358,7 +360,7 @@ class StoreServer:
         self._declare_role([self.session.declare_subscriber(changes, self._on_sample("replica"))])
         self.role, self.leader = "following", leader
         self._acks.followers = set()
-        self._catch_up()
+        self._replica.catch_up()
         self._announce()
         log.info("store %s follows %s", self.zid, leader)
 
@@ -366,7 +368,7 @@ class StoreServer:
         if self._token is None:
             self._token = self.session.liveliness().declare_token(f"{self.root}/@stores/{self.zid}")
         if self.role == "following":
-            self._send_acks({name: st.seq for name, st in self._spaces.items()})
+            self._replica.confirm({name: st.seq for name, st in self._spaces.items()})
 
     def _peer(self, what: str, zid: str, alive: bool) -> None:
         if what == "store":
@@ -394,60 +396,3 @@ class StoreServer:
         message = unpack(payload)
         if isinstance(message, dict) and isinstance(message.get("seqs"), dict):
             self._acks.acked(str(message.get("store")), message["seqs"])
-
-    def _send_acks(self, seqs: dict[str, int]) -> None:
-        message = pack({"store": self.zid, "seqs": seqs})
-        self.session.put(
-            f"{self.root}/@repl/ack", message, congestion_control=zenoh.CongestionControl.BLOCK
-        )
-
-    def _catch_up(self) -> None:
-        """Fetch from the leader what this store missed, space by space."""
-        try:
-            reply = ask_store(self.session, f"{self.root}/@repl/spaces", b"", 5.0, what="sync")
-        except SpaceError as exc:
-            log.warning("could not ask the leader for its spaces: %s", exc)
-            return
-        for name, seq in reply.items():
-            self._fetch(self._space(str(name)), int(seq))
-
-    def _fetch(self, state: SpaceState, last: int) -> None:
-        if last <= state.seq:
-            return
-        key = keys.service_key(state.name, "log", self.root)
-        request = pack({"from": state.seq + 1, "to": last})
-        try:
-            changes = ask_store(self.session, key, request, 10.0, what="log request")["changes"]
-        except SpaceError as exc:
-            log.warning("could not catch up %s: %s", state.name, exc)
-            return
-        self._install(state, [bytes(p) for p in changes])
-
-    def _install(self, state: SpaceState, payloads: list[bytes]) -> None:
-        commits = []
-        for payload in payloads:
-            net = Changeset.decode(payload)
-            if net.seq == state.seq + 1:
-                commits.append(state.install(net, payload))
-        if commits:
-            assert self._db is not None
-            self._db.commit(commits)
-
-    def _follow_changes(self, replicas: list[_Request]) -> None:
-        if self.role != "following":
-            return
-        touched: dict[str, int] = {}
-        for req in replicas:
-            try:
-                net = Changeset.decode(req.payload or b"")
-            except MalformedPayload as exc:
-                log.warning("malformed replicated change on %r skipped: %s", req.space, exc)
-                continue
-            state = self._space(req.space)
-            if net.seq > state.seq + 1:
-                self._fetch(state, net.seq - 1)
-            if net.seq == state.seq + 1:
-                self._install(state, [req.payload or b""])
-            touched[req.space] = state.seq
-        if touched:
-            self._send_acks(touched)
