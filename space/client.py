@@ -55,6 +55,7 @@ class TripleSpace:
         self._owns_session = _owns_session
         self._dispatcher = Dispatcher(self._fetch_log)
         self._subscriptions: set[Subscription] = set()
+        self._reconnections: zenoh.TransportEventsListener | None = None
 
     @classmethod
     def open(
@@ -81,6 +82,9 @@ class TripleSpace:
         for sub in list(self._subscriptions):
             sub.close()
         self._subscriptions.clear()
+        if self._reconnections is not None:
+            self._reconnections.undeclare()
+            self._reconnections = None
         self._dispatcher.close()
         if self._owns_session:
             self.session.close()
@@ -171,25 +175,6 @@ class TripleSpace:
             cause=cause,
         )
         return self.send(cs, timeout=timeout)
-
-    def apply_nowait(
-        self,
-        added: Triples = (),
-        removed: Triples = (),
-        *,
-        inferred_added: Triples = (),
-        inferred_removed: Triples = (),
-        cause: str | None = None,
-    ) -> str:
-        """Fire-and-forget twin of `apply`."""
-        cs = self.changeset(
-            added,
-            removed,
-            inferred_added=inferred_added,
-            inferred_removed=inferred_removed,
-            cause=cause,
-        )
-        return self.send_nowait(cs)
 
     @contextmanager
     def transaction(self, *, timeout: float = 5.0) -> Iterator[Transaction]:
@@ -303,6 +288,11 @@ class TripleSpace:
             SpaceUnavailable: no store answered (the sequence number is needed to fill gaps).
         """
         t = self._template(template)
+        if self._reconnections is None:
+            # after a link comes back, changes published meanwhile are fetched from the log
+            self._reconnections = self.session.info.declare_transport_events_listener(
+                self._on_transport
+            )
         sub = Subscription(self._dispatcher, t, callback)
         self._dispatcher.add(sub)
         sub.attach(
@@ -325,6 +315,10 @@ class TripleSpace:
             raise
         self._dispatcher.mark_ready(sub, seq, initial)
         return sub
+
+    def _on_transport(self, event: zenoh.TransportEvent) -> None:
+        if event.kind == zenoh.SampleKind.PUT:
+            self._dispatcher.resync()
 
     def unsubscribe(self, sub: Subscription) -> None:
         """Stop a subscription."""

@@ -87,6 +87,7 @@ class Subscription:
 
 
 Fetch = Callable[[int, int], list[bytes]]
+_LATEST = 2**62  # "up to the store's current sequence number" in a log request
 
 
 class Dispatcher:
@@ -97,6 +98,7 @@ class Dispatcher:
         self._queue: queue.SimpleQueue[tuple[Subscription, bytes | None] | None] = (
             queue.SimpleQueue()
         )
+        self._resync = b""  # the queued marker: catch up with the store's log
         self._subs: set[Subscription] = set()
         self._thread = threading.Thread(target=self._run, name="tspace-dispatch", daemon=True)
         self._started = False
@@ -127,6 +129,16 @@ class Dispatcher:
         sub.initial = initial
         self._queue.put((sub, None))
 
+    def resync(self) -> None:
+        """Make every subscription fetch what it missed (after a reconnection).
+
+        Safe to call from a Zenoh callback: it only enqueues.
+        """
+        with self._lock:
+            subs = list(self._subs)
+        for sub in subs:
+            self._queue.put((sub, self._resync))
+
     def forget(self, sub: Subscription) -> None:
         """Stop delivering to a subscription."""
         with self._lock:
@@ -156,6 +168,9 @@ class Dispatcher:
                 early, sub.early = sub.early, []
                 for entry in early:
                     self._process(sub, entry)
+            elif payload is self._resync:
+                if sub.ready:
+                    self._fill_gap(sub, _LATEST)
             elif not sub.ready:
                 sub.early.append(payload)
             else:

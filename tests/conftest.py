@@ -42,6 +42,16 @@ def wait_for(
         time.sleep(0.02)
 
 
+def store_answers(endpoint: str) -> bool:
+    """Return True when a store answers through the router at `endpoint` within a second."""
+    try:
+        with TripleSpace.open(endpoint, space="ping") as ts:
+            ts.snapshot(timeout=1.0)
+        return True
+    except SpaceError:
+        return False
+
+
 def tspace_cmd(*args: str) -> list[str]:
     """Return the argv that runs `tspace ARGS` with this interpreter."""
     return [PYTHON, "-m", "space.cli", *args]
@@ -79,12 +89,7 @@ class Server:
         assert self.proc is not None
         if self.proc.poll() is not None:
             pytest.fail(f"tspace serve exited with {self.proc.returncode}: {self.log.read_text()}")
-        try:
-            with TripleSpace.open(self.endpoint, space="ping") as ts:
-                ts.snapshot(timeout=1.0)
-            return True
-        except SpaceError:
-            return False
+        return store_answers(self.endpoint)
 
     def stop(self, sig: int = signal.SIGTERM) -> int:
         """Stop the process with `sig` and return its exit code."""

@@ -4,23 +4,14 @@ import signal
 
 from rdflib import Literal, Namespace
 
-from conftest import AC_NS, Server, wait_for
-from space import SpaceError, TripleSpace
+from conftest import AC_NS, Server, store_answers, wait_for
+from space import TripleSpace
 
 AC = Namespace(AC_NS)
 
 
 def _counted(ts: TripleSpace) -> set[int]:
     return {int(o) for o in ts.query((AC.counter, AC.n, None)).objects()}
-
-
-def _answers(endpoint: str) -> bool:
-    try:
-        with TripleSpace.open(endpoint, space="rep") as ts:
-            ts.snapshot(timeout=1.0)
-        return True
-    except SpaceError:
-        return False
 
 
 def test_killing_the_leader_loses_no_acknowledged_change(tmp_path):
@@ -47,7 +38,7 @@ def test_killing_the_leader_loses_no_acknowledged_change(tmp_path):
             for i in range(51, 60):
                 ts.write([(AC.counter, AC.n, Literal(i))])
         b.stop(signal.SIGKILL)
-        wait_for(lambda: _answers(a.endpoint), 20, "the returning store to take over")
+        wait_for(lambda: store_answers(a.endpoint), 20, "the returning store to take over")
         with TripleSpace.open(a.endpoint, space="rep") as ts:
             assert _counted(ts) == set(range(60))
             assert ts.snapshot()[1] == 60
