@@ -34,6 +34,8 @@ class Situation:
         person_room: room of `ac:attended_person`.
         guide_destination: `ac:guide_destination`.
         elapsed: `ac:task_elapsed` in the space (to resume the count after a restart).
+        resume: type of `ac:resume_task` in the space (the work to resume after
+            charging, for an automaton that restarted meanwhile).
     """
 
     now: float
@@ -46,6 +48,7 @@ class Situation:
     person_room: str | None = None
     guide_destination: str | None = None
     elapsed: float | None = None
+    resume: str | None = None
 
 
 @dataclass(frozen=True)
@@ -83,6 +86,8 @@ class TaskAutomaton:
         outside = s.task or "Idle"
         if self.task is None:
             self._enter(outside, s.now - (s.elapsed or 0.0))
+            if outside in POWER_TASKS:
+                self.resume = s.resume
         elif outside != self.task:
             self._enter(outside, s.now)
         if s.requested is not None:
@@ -115,6 +120,8 @@ class TaskAutomaton:
             self._enter("Charging", s.now)
         elif self.task == "Charging" and s.battery == "full":
             resume, self.resume = self.resume, None
+            if resume == "AttendingPatient" and s.person_room is None:
+                resume = None  # the patient was handed over to another robot meanwhile
             self._enter(resume or "Idle", s.now)
         elif self.task == "Guiding" and s.guide_destination is not None:
             if s.location == s.guide_destination and stopped:

@@ -47,7 +47,16 @@ def test_work_requested_while_charging_waits_for_the_charge():
     assert plan.task == "Charging"
     assert plan.resume == "AttendingPatient"
     assert plan.take_request
-    assert automaton.step(at(2, task="Charging", battery="full")).task == "AttendingPatient"
+    plan = automaton.step(at(2, task="Charging", battery="full", person_room="room_101"))
+    assert plan.task == "AttendingPatient"
+
+
+def test_a_patient_handed_over_while_charging_is_not_gone_back_to():
+    automaton = TaskAutomaton()
+    automaton.step(at(0, task="AttendingPatient", location="room_101", person_room="room_101"))
+    automaton.step(at(1, task="GoingToDock", location="room_101", battery="very low"))
+    # Fleet rules gave the patient to another robot: no attended person any more.
+    assert automaton.step(at(2, task="Charging", battery="full")).task == "Idle"
 
 
 def test_guiding_ends_at_the_destination():
@@ -73,3 +82,11 @@ def test_elapsed_time_counts_from_the_task_start_and_survives_a_restart():
     assert automaton.step(at(25, task="AttendingPatient")).elapsed == 15
     restarted = TaskAutomaton()
     assert restarted.step(at(3, task="AttendingPatient", elapsed=15)).elapsed == 15
+
+
+def test_a_restart_while_charging_still_resumes_the_interrupted_work():
+    restarted = TaskAutomaton()
+    plan = restarted.step(at(0, task="Charging", resume="AttendingPatient"))
+    assert plan.resume == "AttendingPatient"
+    plan = restarted.step(at(5, task="Charging", battery="full", person_room="room_101"))
+    assert (plan.task, plan.target) == ("AttendingPatient", "room_101")
