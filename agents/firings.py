@@ -1,9 +1,10 @@
 """Records of rule firings in the space, so that people can see why the robot changed.
 
-Each production firing becomes an `ac:RuleFiring` individual (`ac:firing_N`)
-naming its rule, the changeset that caused it and the robot it concerned. Only
-the last `keep` records stay in the space: the log is for the HMI's "last rule
-firings", not an archive.
+Each production firing becomes an `ac:RuleFiring` individual (`ac:firing_N`,
+or `ac:firing_ROBOT_N` from a per-robot reasoner) naming its rule, the
+changeset that caused it and the robot it concerned. Only the last `keep`
+records stay in the space: the log is for the HMI's "last rule firings", not
+an archive.
 """
 
 from __future__ import annotations
@@ -29,16 +30,17 @@ def is_record(triple: Triple) -> bool:
 class FiringLog:
     """The firing records this reasoner keeps in the space, oldest first."""
 
-    def __init__(self, keep: int = 100) -> None:
+    def __init__(self, keep: int = 100, prefix: str = FIRING_PREFIX) -> None:
         self.keep = keep
+        self.prefix = prefix
         self.next = 1
         self._records: deque[list[Triple]] = deque()
 
     def restore(self, triples: Iterable[Triple]) -> None:
-        """Take back the records found in the space (after a restart), numbering after them."""
+        """Take back this log's records from the space (after a restart), numbering after them."""
         graph = Graph()
         for triple in triples:
-            if is_record(triple):
+            if str(triple[0]).startswith(self.prefix):
                 graph.add(triple)
         numbered = []
         for record in set(graph.subjects()):
@@ -53,7 +55,7 @@ class FiringLog:
         self, rule: str, cause: str | None, robot: Node, when: datetime | None = None
     ) -> tuple[list[Triple], list[Triple]]:
         """Add one firing; return (triples to add, triples of records to drop)."""
-        iri = URIRef(f"{FIRING_PREFIX}{self.next}")
+        iri = URIRef(f"{self.prefix}{self.next}")
         triples: list[Triple] = [
             (iri, RDF.type, AC.RuleFiring),
             (iri, AC.rule_name, Literal(rule)),

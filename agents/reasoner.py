@@ -8,21 +8,28 @@ own changesets are ignored. A changed rules file is reloaded without a
 restart; a broken one is logged with its line and column and the rules in
 force stay. On start it writes the ontology (and `--robot-file`) into the
 space when the space does not have them yet.
+
+One reasoner serves a whole fleet. With `--per-robot`, one per robot instead:
+each applies every change but writes only what `agents.ownership` gives its
+robot, so a robot's reasoner can run on the robot.
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from rdflib import OWL, RDF, URIRef
 from rdflib.term import Node
 
-from agents.base import Agent, run_agent
-from agents.firings import FiringLog, is_record
+from agents.base import Agent, local_name, run_agent
+from agents.firings import FIRING_PREFIX, FiringLog, is_record
+from agents.ownership import Answer, concerned_robot, firing_robot
 from agents.view import AC
 from space import Change, Subscription
 from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
@@ -41,8 +48,14 @@ class Reasoner(Agent):
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)
+        prefix = FIRING_PREFIX
+        if args.per_robot:
+            # Several reasoners write into one space: names and records of their own.
+            self.name = args.name or f"{self.kind}.{local_name(self.robot)}"
+            self.log = logging.getLogger(self.name)
+            prefix += f"{local_name(self.robot)}_"
         self.engine: RuleEngine | None = None
-        self.firings = FiringLog(args.keep_firings)
+        self.firings = FiringLog(args.keep_firings, prefix)
         self._mtimes: dict[Path, float] = {}
         self._checked = 0.0
 
@@ -75,6 +88,11 @@ class Reasoner(Agent):
             default=100,
             metavar="N",
             help="firing records kept in the space (default 100)",
+        )
+        parser.add_argument(
+            "--per-robot",
+            action="store_true",
+            help="answer for --robot only, beside one such reasoner per robot (agents.ownership)",
         )
 
     @property
@@ -110,7 +128,7 @@ class Reasoner(Agent):
         self.engine = engine
         self.started = True
         self.log.info("loaded %d rules over %d asserted triples", len(engine.rules), len(asserted))
-        self._write(delta, None, inferred_before=inferred)
+        self._write(self._reconciled(delta, inferred), None)
         return subscription
 
     def _build(self) -> RuleEngine:
@@ -144,8 +162,19 @@ class Reasoner(Agent):
         removed += self._replaced(added, removed)
         if not added and not removed:
             return
-        delta = self.engine.apply(added=added, removed=removed)
-        self._write(delta, change.id)
+        answer = Answer.of(self.engine.apply(added=added, removed=removed))
+        if self.args.per_robot:
+            robot = concerned_robot(self.engine, [*added, *removed])
+            if robot is None:
+                answer = self._shared(answer)
+            elif robot != self.robot:
+                return  # that robot's reasoner answers, having drawn the same conclusions
+        self._write(answer, change.id)
+
+    def _shared(self, answer: Answer) -> Answer:
+        """Return the part of an answer to a shared change this reasoner writes."""
+        assert self.engine is not None
+        return answer.share(self.engine, self.robot) if self.args.per_robot else answer
 
     def _replaced(self, added: list[Triple], removed: list[Triple]) -> list[Triple]:
         """Return the old values of functional properties that `added` replaces.
@@ -153,29 +182,34 @@ class Reasoner(Agent):
         The store replaces them too; doing it here keeps the engine's state the
         store's even when a writer did not say what it replaced.
         """
-        assert self.engine is not None
-        graph, out = self.engine.graph, []
+        engine, out = self.engine, []
+        assert engine is not None
         for s, p, o in added:
-            if (p, RDF.type, OWL.FunctionalProperty) in graph:
-                out += [
-                    (s, p, x) for x in graph.objects(s, p) if x != o and (s, p, x) not in removed
-                ]
+            if (p, RDF.type, OWL.FunctionalProperty) in engine:
+                out += [t for t in engine.match(s, p) if t[2] != o and t not in removed]
         return out
 
-    def _write(
-        self, delta: Delta, cause: str | None, *, inferred_before: set[Triple] | None = None
-    ) -> None:
-        """Write a delta (and its firing records) to the space as one changeset."""
+    def _reconciled(self, delta: Delta, inferred_before: set[Triple]) -> Answer:
+        """Return the answer to a (re)load of the engine.
+
+        Its inferred changes turn what the space's inferred graph held
+        (`inferred_before`) into what the engine infers now.
+        """
+        assert self.engine is not None
+        now = set(self.engine.triples(Origin.INFERRED))
+        answer = replace(
+            Answer.of(delta),
+            inferred_added=tuple(now - inferred_before),
+            inferred_removed=tuple(inferred_before - now),
+        )
+        return self._shared(answer)
+
+    def _write(self, answer: Answer, cause: str | None) -> None:
+        """Write an answer (and its firing records) to the space as one changeset."""
         assert self.ts is not None and self.engine is not None
-        inferred_added, inferred_removed = list(delta.inferred_added), list(delta.inferred_removed)
-        if inferred_before is not None:
-            now = set(self.engine.triples(Origin.INFERRED))
-            inferred_added, inferred_removed = (
-                list(now - inferred_before),
-                list(inferred_before - now),
-            )
-        added, removed = list(delta.asserted_added), list(delta.asserted_removed)
-        for firing in delta.firings:
+        inferred_added, inferred_removed = answer.inferred_added, answer.inferred_removed
+        added, removed = list(answer.added), list(answer.removed)
+        for firing in answer.firings:
             self.log.info("fired %s (cause %s)", firing.rule, cause)
             new, old = self.firings.record(firing.rule, cause, self._robot_of(firing))
             added += new
@@ -194,11 +228,7 @@ class Reasoner(Agent):
     def _robot_of(self, firing: Firing) -> Node:
         """Return the robot a firing concerned: a robot among its premises, else `--robot`."""
         assert self.engine is not None
-        graph = self.engine.graph
-        for s, _p, _o in firing.triggers:
-            if (s, RDF.type, AC.Robot) in graph:
-                return s
-        return self.robot
+        return firing_robot(self.engine, firing) or self.robot
 
     # Rules reload
 
@@ -230,7 +260,7 @@ class Reasoner(Agent):
             return
         self.engine = engine
         self.log.info("rules reloaded: %d rules", len(engine.rules))
-        self._write(delta, None, inferred_before=inferred_before)
+        self._write(self._reconciled(delta, inferred_before), None)
 
 
 def _mtime(path: Path) -> float:

@@ -116,6 +116,23 @@ class RuleEngine:
             if origin is None or (t in self._asserted) == (origin is Origin.ASSERTED):
                 yield self._decode(t)
 
+    def match(
+        self, subject: Node | None = None, predicate: Node | None = None, obj: Node | None = None
+    ) -> Iterator[Triple]:
+        """Yield the current triples that match a pattern (None matches anything).
+
+        Costs what matches, through the indexes: unlike `graph`, nothing is
+        rebuilt after an update, so a caller may look things up on every change.
+        """
+        pattern = (subject, predicate, obj)
+        ids = [None if x is None else self.terms.find(x) for x in pattern]
+        if any(i is None and x is not None for i, x in zip(ids, pattern, strict=True)):
+            return  # a term the engine never saw: nothing matches
+        functors = self.terms.functors
+        for t in self._store.match(*ids):
+            if t[2] not in functors:
+                yield self._decode(t)
+
     def __contains__(self, triple: object) -> bool:
         ids = tuple(self.terms.find(x) for x in triple) if isinstance(triple, tuple) else ()
         return len(ids) == 3 and ids in self._store
