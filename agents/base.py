@@ -136,16 +136,26 @@ class Agent:
         return self.ts.subscribe(None, self._inbox.put, snapshot=True, timeout=self.args.timeout)
 
     def run(self) -> None:
-        """Handle changes and tick every `--tick` seconds until `stop()`."""
+        """Handle changes and tick until `stop()`.
+
+        A tick follows every batch of changes at once (the changes waiting are
+        applied first), so an agent acts on a conclusion in milliseconds, not
+        at its next period; without changes it ticks every `--tick` seconds.
+        """
         next_tick = time.monotonic()
         while not self._stop.is_set():
             try:
                 change = self._inbox.get(timeout=max(0.0, next_tick - time.monotonic()))
             except queue.Empty:
                 change = None
-            if change is not None:
+            changed = change is not None
+            while change is not None:
                 self._handle(change)
-            if self.started and time.monotonic() >= next_tick:
+                try:
+                    change = self._inbox.get_nowait()
+                except queue.Empty:
+                    change = None
+            if self.started and (changed or time.monotonic() >= next_tick):
                 self._guarded(self.tick, "tick")
                 next_tick = time.monotonic() + self.args.tick
             elif not self.started:

@@ -73,6 +73,7 @@ class Behavior(Agent):
             person_room=_name(v.value(person, AC.room)),
             guide_destination=_name(v.value(robot, AC.guide_destination)),
             elapsed=v.number(robot, AC.task_elapsed),
+            resume=v.task_type(v.value(robot, AC.resume_task)),
         )
 
     def _values(self, plan: Plan) -> dict[tuple[Node, Node], Node | None]:

@@ -23,6 +23,7 @@ from rdflib.term import Node
 
 from agents.base import Agent, local_name, run_agent
 from agents.hmi_web.server import CommandError, Commands, HmiServer, StateBoard
+from agents.sim.battery import middle_of
 from agents.view import AC
 from space import Change
 from space.mirror import ChangeRecord
@@ -161,13 +162,11 @@ class Hmi(Agent):
         battery = self.view.device(robot, AC.Battery)
         if level not in thresholds or battery is None:
             raise CommandError(f"cannot set the battery of {params.get('robot')!r} to {level!r}")
-        # A charge in the middle of the level, so the simulated battery agrees with it.
-        below = max((v for v in thresholds.values() if v < thresholds[level]), default=0.0)
-        percent = min(100, int((below + thresholds[level]) / 2))
+        # A charge in the middle of the level: the hw_monitor adopts it as the battery's.
         return self.set_values(
             {
                 (battery, AC.battery_level): Literal(level),
-                (battery, AC.charge_percent): Literal(percent),
+                (battery, AC.charge_percent): Literal(middle_of(level, thresholds)),
             }
         )
 

@@ -4,7 +4,8 @@ It publishes what the devices sense (battery level and charge, faults, what the
 laser sees) and obeys the running modes the rules command (`ac:running_mode`),
 reporting the mode each device is actually in (`ac:actual_mode`). Values are
 written only when they change, as levels the ontology defines. On restart it
-takes the battery charge and device modes back from the space.
+takes the battery charge and device modes back from the space; a charge or
+level another agent writes (the HMI, a scenario) becomes the battery's.
 """
 
 from __future__ import annotations
@@ -17,9 +18,10 @@ from rdflib import Literal, URIRef
 from rdflib.term import Node
 
 from agents.base import Agent, run_agent
-from agents.sim.battery import DEFAULT_LEVELS, Battery, level_of
-from agents.sim.devices import FAULTS, MODES, Driver, drain, obstacles_seen
+from agents.sim.battery import CHARGE_RATE, DEFAULT_LEVELS, Battery, level_of, middle_of
+from agents.sim.devices import FAULTS, MODES, SWITCH_DELAY, Driver, drain, obstacles_seen
 from agents.view import AC
+from space import Change
 
 
 class HwMonitor(Agent):
@@ -30,7 +32,7 @@ class HwMonitor(Agent):
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)
         self.drivers: dict[URIRef, Driver] = {}
-        self.battery = Battery(args.charge)
+        self.battery = Battery(args.charge, charge_rate=args.charge_rate)
         self._injected: dict[URIRef, str] = {}
         self._refused: dict[tuple[URIRef, str], str] = {}
         self._rng = random.Random(args.seed)
@@ -52,6 +54,20 @@ class HwMonitor(Agent):
             default=0.0,
             metavar="PER_HOUR",
             help="random wheel motor errors per simulated hour (default 0)",
+        )
+        parser.add_argument(
+            "--charge-rate",
+            type=float,
+            default=CHARGE_RATE,
+            metavar="PERCENT",
+            help=f"charge gained per simulated second on the dock (default {CHARGE_RATE:g})",
+        )
+        parser.add_argument(
+            "--switch-delay",
+            type=float,
+            default=SWITCH_DELAY,
+            metavar="SECONDS",
+            help=f"simulated seconds a device takes to switch modes (default {SWITCH_DELAY:g})",
         )
         parser.add_argument("--seed", type=int, help="random seed of the fault simulation")
 
@@ -76,6 +92,7 @@ class HwMonitor(Agent):
                 mode if mode in MODES else "active",
                 fault if fault in FAULTS else "none",
                 fault_rate=rate,
+                switch_delay=self.args.switch_delay,
                 rng=self._rng,
             )
             self._injected[device] = self.view.text(device, AC.simulate_fault) or "none"
@@ -83,8 +100,35 @@ class HwMonitor(Agent):
             if self.view.has_type(device, AC.Battery):
                 charge = self.view.number(device, AC.charge_percent)
                 if charge is not None:
-                    self.battery.percent = charge
-                self.log.info("battery at %.0f %%", self.battery.percent)
+                    self.battery.adopt(charge)
+                self.log.info("battery at %.0f %%", self.battery.reported_percent())
+
+    def on_change(self, change: Change) -> None:
+        """Adopt a battery charge or level that another agent wrote (the HMI, a scenario).
+
+        Without this the next reading would overwrite it with the simulated charge.
+        """
+        if change.agent == self.name:
+            return
+        battery = self.view.device(self.robot, AC.Battery)
+        written = {p: o for s, p, o in change.added if s == battery}
+        if AC.charge_percent in written:
+            try:
+                percent = float(written[AC.charge_percent])
+            except ValueError:
+                self.log.warning("ignoring charge %r: not a number", written[AC.charge_percent])
+                return
+        elif AC.battery_level in written:
+            levels = self.view.levels(AC.BatteryLevel, AC.below_percent) or DEFAULT_LEVELS
+            try:
+                percent = middle_of(str(written[AC.battery_level]), levels)
+            except KeyError:
+                self.log.warning("ignoring unknown battery level %r", written[AC.battery_level])
+                return
+        else:
+            return
+        self.battery.adopt(percent)
+        self.log.info("battery set to %.0f %% by %s", percent, change.agent)
 
     def tick(self) -> None:
         """Obey commands, advance the drivers and the battery, publish what changed."""
@@ -102,9 +146,8 @@ class HwMonitor(Agent):
     def _on_charger(self, moving: bool) -> bool:
         """Return True while charging: the task is Charging, or any power task at the dock.
 
-        Charging at the dock whatever the power task matters: the paper's "going to
-        dock" rule sends a charging robot with a very low battery back to GoingToDock,
-        and only a charge that goes on meanwhile lets the level leave "very low".
+        A robot standing on its dock is on its charger, whatever the power task
+        says (GoingToDock as it arrives, Docking).
         """
         task = self.view.task_type(self.view.value(self.robot, AC.current_task))
         if task == "Charging":
@@ -143,7 +186,8 @@ class HwMonitor(Agent):
         battery = self.view.device(self.robot, AC.Battery)
         if battery is not None:
             levels = self.view.levels(AC.BatteryLevel, AC.below_percent) or DEFAULT_LEVELS
-            values[(battery, AC.battery_level)] = Literal(level_of(self.battery.percent, levels))
+            level = level_of(self.battery.percent, levels, charging=self.battery.charging)
+            values[(battery, AC.battery_level)] = Literal(level)
             values[(battery, AC.charge_percent)] = Literal(self.battery.reported_percent())
         for laser in self.view.devices(self.robot, AC.LaserScanner):
             place = self.view.value(self.robot, AC.location)

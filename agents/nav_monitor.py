@@ -4,7 +4,8 @@ It translates the target place the behaviour agent sets (`ac:target_place`)
 into map coordinates (`ac:map_x`, `ac:map_y` of the place, from the robot
 file), drives the base there at the commanded maximum speed (`ac:motion_speed`
 of the base, a level the integrator maps to m/s with `ac:SpeedLevel`), and
-reports the robot's location (nearest place), position and navigation status.
+reports the robot's location (nearest place), position and navigation status,
+and the speed limit it applies (`ac:speed_limit`, m/s).
 Disabled navigation (the base's `ac:running_mode` or the navigation skill's
 `ac:skill_status`) stops the base; enabled again, it resumes the trip.
 """
@@ -131,6 +132,7 @@ class NavMonitor(Agent):
         base = self.view.device(self.robot, AC.MobileBase)
         if base is not None:
             values[(base, AC.actual_speed)] = Literal(Decimal(f"{self.base.speed:.2f}"))
+            values[(base, AC.speed_limit)] = Literal(Decimal(f"{self.base.max_speed:.2f}"))
         return values
 
 

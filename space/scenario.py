@@ -126,9 +126,13 @@ BATTERY = Scenario(
     ),
     # A simulated minute every two real seconds; the battery starts a little above
     # "very low" so the drain is over before the patient's visit takes too long
-    # (AttendingPatient's max_duration).
-    agent_args={name: ["--time-scale", "30"] for name in ("hw_monitor", "nav_monitor", "behavior")},
-    prepare=_battery_at(16, "low"),
+    # (AttendingPatient's max_duration), and charges in seconds, not a quarter of an hour.
+    agent_args={
+        "hw_monitor": ["--time-scale", "30", "--charge-rate", "0.5"],
+        "nav_monitor": ["--time-scale", "30"],
+        "behavior": ["--time-scale", "30"],
+    },
+    prepare=_battery_at(13, "low"),
 )
 
 SCENARIOS = {s.name: s for s in (BATTERY,)}

@@ -47,6 +47,33 @@ def test_battery_charges_while_the_task_is_charging(robot, launch):
     wait_for(lambda: value(robot, AC.robot1_battery, AC.battery_level) == Literal("full"), 15)
 
 
+def test_a_level_or_charge_set_by_another_agent_holds(robot, launch):
+    launch.start("hw_monitor")
+    wait_for(lambda: value(robot, AC.robot1_screen, AC.actual_mode) == Literal("active"))
+    robot.write([(AC.robot1_battery, AC.battery_level, Literal("very low"))])
+    wait_for(lambda: charge(robot) == 5)  # the middle of "very low", adopted by the battery
+    robot.write([(AC.robot1_battery, AC.charge_percent, Literal(40))])
+    wait_for(lambda: value(robot, AC.robot1_battery, AC.battery_level) == Literal("normal"))
+    # The monitor's later reports keep what was set.
+    robot.write([(AC.robot1_screen, AC.running_mode, Literal("stand-by"))])
+    wait_for(lambda: value(robot, AC.robot1_screen, AC.actual_mode) == Literal("stand-by"))
+    assert value(robot, AC.robot1_battery, AC.battery_level) == Literal("normal")
+    assert charge(robot) == 40
+
+
+def test_a_charging_battery_is_not_very_low_so_the_dock_rule_cannot_fire_again(robot, launch):
+    robot.apply(
+        [
+            (AC.robot1, AC.current_task, AC.task_charging),
+            (AC.robot1_battery, AC.charge_percent, Literal(3)),
+        ],
+        [(AC.robot1, AC.current_task, AC.task_idle)],
+    )
+    launch.start("hw_monitor")
+    wait_for(lambda: value(robot, AC.robot1_battery, AC.battery_level) == Literal("low"))
+    assert charge(robot) < 10
+
+
 def test_devices_obey_running_modes_and_report_them(robot, launch):
     launch.start("hw_monitor")
     wait_for(lambda: value(robot, AC.robot1_screen, AC.actual_mode) == Literal("active"))

@@ -15,9 +15,12 @@ import urllib.request
 from pathlib import Path
 
 import pytest
+from agentprocs import value
+from rdflib import Literal, Namespace
 from uprun import Up
 
-from conftest import REPO, wait_for
+from conftest import AC_NS, REPO, wait_for
+from space import TripleSpace
 
 websocket = pytest.importorskip("websocket", reason="the browser test needs websocket-client")
 
@@ -160,6 +163,7 @@ def page(tmp_path, deployment):
 
 
 ROBOT = '[data-robot="robot1"]'
+AC = Namespace(AC_NS)
 
 
 def test_the_page_shows_the_robot_live_and_assigns_a_task(page, deployment):
@@ -206,3 +210,24 @@ def test_a_very_low_battery_set_from_the_page_fires_the_papers_rules(page, deplo
     assert time.monotonic() - started < 30
     line = next(f for f in firings() if "ac:motion_speed low" in f)
     assert " <- " in line or " ← " in line, line  # the cause is shown
+
+
+def test_a_battery_level_set_from_the_page_holds_and_the_robot_acts_on_it(page, deployment):
+    wait_for(lambda: page.text("#status") == "live", 30, "the page to go live")
+    wait_for(lambda: page.text(f"{ROBOT} [data-field=task_type]") == "Idle", 30, "the robot")
+    page.choose(f"{ROBOT} .battery-select", "low")
+    page.click(f"{ROBOT} .set-battery")
+    # Nobody is served and the battery is low: the interaction devices go to stand-by.
+    for device in ("robot1_screen", "robot1_speakers", "robot1_microphone"):
+        mode = f'{ROBOT} tr[data-device="{device}"] [data-field=mode]'
+        wait_for(lambda mode=mode: page.text(mode) == "stand-by", 30, f"{device} on stand-by")
+    # Once the simulated drivers obeyed, the hw_monitor has reported since the level was set:
+    # the level is still the one set from the page.
+    with TripleSpace.open(f"tcp/127.0.0.1:{deployment.port}", space="ward") as ts:
+        wait_for(
+            lambda: value(ts, AC.robot1_screen, AC.actual_mode) == Literal("stand-by"),
+            30,
+            "the screen's driver to switch",
+        )
+    assert page.text(f"{ROBOT} [data-field=battery]").startswith("low ("), page.text("#robots")
+    assert page.text(f'{ROBOT} tr[data-device="robot1_screen"] [data-field=mode]') == "stand-by"

@@ -82,6 +82,10 @@ def assert_the_robot_behaved(up: Up) -> None:
         if position < len(story) and story[position] in line:
             position += 1
     assert position == len(story), f"missing {story[position:]} in {robot_lines}"
+    # Charging with a very low battery does not send the robot to its dock again.
+    charging = next(i for i, line in enumerate(robot_lines) if "task Charging" in line)
+    assert not [line for line in robot_lines[charging:] if "task GoingToDock" in line]
+    assert len(re.findall(r"firing: .*verylow_battery_causes_going_to_dock_task", log)) == 1
 
 
 @needs_reasoner
@@ -92,15 +96,23 @@ def test_the_battery_scenario_completes(tmp_path):
         assert_the_robot_behaved(up)
 
 
+# Each agent is killed after the step that leaves it work to do: the reasoner before the
+# battery is very low, the nav monitor on the way to the dock, the behaviour machine and the
+# hw_monitor at the dock (the charge, and going back to the patient, must survive).
+KILLED_AFTER_STEP = {"reasoner": 1, "nav_monitor": 3, "behavior": 6, "hw_monitor": 7}
+
+
 @needs_reasoner
-def test_the_scenario_survives_an_agent_killed_with_sigkill(tmp_path):
+@pytest.mark.parametrize("agent", sorted(KILLED_AFTER_STEP))
+def test_the_scenario_survives_an_agent_killed_with_sigkill(tmp_path, agent):
+    step = KILLED_AFTER_STEP[agent]
     with Up(tmp_path, HOSPITAL, "--scenario", "battery", "--once") as up:
-        wait_for(lambda: len(completed_steps(up)) >= 1, 90, "the robot to attend a patient")
-        victim = up.pid_of("agents.hw_monitor")
+        wait_for(lambda: len(completed_steps(up)) >= step, 90, f"step {step}")
+        victim = up.pid_of(f"agents.{agent}")
         assert victim is not None
         os.kill(victim, signal.SIGKILL)
-        wait_for(lambda: up.stderr_has("hw_monitor: restarted (pid "), 15, "the restart")
-        assert up.stderr_has("hw_monitor: crashed (killed by SIGKILL)")
+        wait_for(lambda: up.stderr_has(f"{agent}: restarted (pid "), 15, "the restart")
+        assert up.stderr_has(f"{agent}: crashed (killed by SIGKILL)")
         assert up.proc.wait(timeout=9 * 90) == 0, up.logs()
         assert_the_robot_behaved(up)
 
@@ -108,9 +120,9 @@ def test_the_scenario_survives_an_agent_killed_with_sigkill(tmp_path):
 def test_a_step_that_does_not_happen_is_named(tmp_path):
     launch = tmp_path / "no_reasoner.toml"
     launch.write_text(NO_REASONER.format(repo=REPO))
-    with Up(tmp_path, launch, "--scenario", "battery", "--once", "--step-timeout", "20") as up:
+    with Up(tmp_path, launch, "--scenario", "battery", "--once", "--step-timeout", "15") as up:
         assert up.proc.wait(timeout=120) == 1, up.logs()
         assert up.stderr_has(
-            "scenario battery failed: step 3/9 did not happen within 20 s: "
+            "scenario battery failed: step 3/9 did not happen within 15 s: "
             "robot heads to the dock (task GoingToDock)"
         ), up.logs()

@@ -1,4 +1,4 @@
-from agents.sim.battery import DEFAULT_LEVELS, Battery, level_of
+from agents.sim.battery import DEFAULT_LEVELS, Battery, level_of, middle_of
 
 
 def test_levels_follow_the_integrators_thresholds():
@@ -36,3 +36,25 @@ def test_battery_never_goes_below_empty():
 def test_reported_charge_moves_in_coarse_steps():
     assert Battery(83.7).reported_percent() == 80
     assert Battery(9.9).reported_percent() == 5
+
+
+def test_a_charging_battery_is_never_very_low():
+    # "very low" sends the robot to its dock; on the charger that call is answered.
+    assert level_of(3, charging=True) == "low"
+    assert level_of(50, charging=True) == "normal"
+    assert level_of(3, {"only": 101}, charging=True) == "only"
+
+
+def test_a_level_set_without_a_charge_gets_one_in_its_middle():
+    assert middle_of("very low") == 5
+    assert middle_of("low") == 17
+    assert level_of(middle_of("normal")) == "normal"
+
+
+def test_an_adopted_charge_is_published_back_unchanged_until_it_drains_a_step():
+    for published in (5, 17, 40):
+        battery = Battery()
+        battery.adopt(published)
+        battery.step(1)
+        assert battery.reported_percent() == published // 5 * 5
+        assert level_of(battery.percent) == level_of(published)

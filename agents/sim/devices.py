@@ -1,10 +1,10 @@
 """Simulated device drivers: they obey running modes after a delay and can fault.
 
 A driver switches to a commanded mode (`active`, `stand-by`, `disabled`) after
-`SWITCH_DELAY` simulated seconds, as real drivers take time to power up or
-down; what it reports (`actual_mode`) is what it is, not what it was told.
-Faults come from an injection (the HMI's `ac:simulate_fault`) or at random at
-`fault_rate` per simulated hour.
+`switch_delay` simulated seconds (default `SWITCH_DELAY`), as real drivers take
+time to power up or down; what it reports (`actual_mode`) is what it is, not
+what it was told. Faults come from an injection (the HMI's `ac:simulate_fault`)
+or at random at `fault_rate` per simulated hour.
 """
 
 from __future__ import annotations
@@ -29,17 +29,19 @@ class Driver:
         mode: the mode the device is in.
         fault: its diagnostics ("none", "warning", "error").
         fault_rate: random errors per simulated hour (0: never).
+        switch_delay: simulated seconds a mode switch takes.
     """
 
     mode: str = "active"
     fault: str = "none"
     fault_rate: float = 0.0
+    switch_delay: float = SWITCH_DELAY
     rng: random.Random = field(default_factory=random.Random)
     _commanded: str | None = None
     _switch_at: float = 0.0
 
     def command(self, mode: str, now: float) -> None:
-        """Ask the driver to switch to `mode`; it does so `SWITCH_DELAY` later.
+        """Ask the driver to switch to `mode`; it does so `switch_delay` later.
 
         Raises:
             ValueError: `mode` is not one of `MODES`.
@@ -49,7 +51,7 @@ class Driver:
         if mode == self.mode:
             self._commanded = None
         elif mode != self._commanded:
-            self._commanded, self._switch_at = mode, now + SWITCH_DELAY
+            self._commanded, self._switch_at = mode, now + self.switch_delay
 
     def inject(self, fault: str) -> None:
         """Make the driver report `fault` from now on ("none" clears it).
