@@ -1,10 +1,12 @@
 """Records of rule firings in the space, so that people can see why the robot changed.
 
-Each production firing becomes an `ac:RuleFiring` individual (`ac:firing_N`,
-or `ac:firing_ROBOT_N` from a per-robot reasoner) naming its rule, the
-changeset that caused it and the robot it concerned. Only the last `keep`
-records stay in the space: the log is for the HMI's "last rule firings", not
-an archive.
+The firings that answer one changeset for one robot become one
+`ac:RuleFiring` individual (`ac:firing_N`, or `ac:firing_ROBOT_N` from a
+per-robot reasoner) naming each rule that fired (`ac:rule_name`, one per rule),
+the changeset that caused them and the robot they concerned: a change that
+fires 200 rules costs 200 triples of bookkeeping, not 1,000. Only the last
+`keep` records stay in the space: the log is for the HMI's "last rule
+firings", not an archive.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ class FiringLog:
         self.prefix = prefix
         self.next = 1
         self._records: deque[list[Triple]] = deque()
+        self._answering: tuple[str, Node] | None = None
 
     def restore(self, triples: Iterable[Triple]) -> None:
         """Take back this log's records from the space (after a restart), numbering after them."""
@@ -54,7 +57,18 @@ class FiringLog:
     def record(
         self, rule: str, cause: str | None, robot: Node, when: datetime | None = None
     ) -> tuple[list[Triple], list[Triple]]:
-        """Add one firing; return (triples to add, triples of records to drop)."""
+        """Add one firing; return (triples to add, triples of records to drop).
+
+        A firing with the same cause and robot as the last one joins its record.
+        """
+        if cause and self._records and self._answering == (cause, robot):
+            record = self._records[-1]
+            name = (record[0][0], AC.rule_name, Literal(rule))
+            if name in record:
+                return [], []
+            record.append(name)
+            return [name], []
+        self._answering = (cause, robot) if cause else None
         iri = URIRef(f"{self.prefix}{self.next}")
         triples: list[Triple] = [
             (iri, RDF.type, AC.RuleFiring),

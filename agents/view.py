@@ -2,7 +2,10 @@
 
 Agents decide from this view instead of asking the store on every tick, so a
 slow or absent store never stalls a control loop. The view is the union of the
-asserted and inferred graphs, as a snapshot reports it.
+asserted and inferred graphs, as a snapshot reports it, without the reasoner's
+firing records: no agent decides from them (the HMI reads them from the
+changes), and a change that fires many rules would cost every agent their
+triples on its way to the robot.
 """
 
 from __future__ import annotations
@@ -10,19 +13,27 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from rdflib import OWL, RDF, Graph, Literal, Namespace, URIRef
+from rdflib.plugins.stores.memory import SimpleMemory
 from rdflib.term import Node
 
 from space.changeset import Changeset
 from space.terms import Triple
 
 AC = Namespace("https://w3id.org/tspace/selfconfig#")
+RECORD_PREFIX = str(AC) + "firing_"
 
 
 class View:
-    """The triples an agent knows, with the lookups agents need."""
+    """The triples an agent knows, with the lookups agents need.
+
+    The graph has no named graphs (a `SimpleMemory` store, cheaper to update
+    than rdflib's default), and the functional properties are kept in a set so
+    that each triple added costs one lookup, not a graph query.
+    """
 
     def __init__(self, triples: Iterable[Triple] = ()) -> None:
-        self.graph = Graph()
+        self.graph = Graph(store=SimpleMemory())
+        self._functional: set[Node] = set()
         self.add(triples)
 
     def apply(self, change: Changeset) -> None:
@@ -34,21 +45,30 @@ class View:
         """Add triples; a functional property's new value replaces the old one.
 
         The store already replaces functional values, but a change may reach us
-        before the removal it implies, so the view enforces it too.
+        before the removal it implies, so the view enforces it too. Firing
+        records are left out.
         """
+        graph, functional = self.graph, self._functional
         for s, p, o in triples:
-            if self.is_functional(p):
-                self.graph.remove((s, p, None))
-            self.graph.add((s, p, o))
+            if s.startswith(RECORD_PREFIX):
+                continue
+            if p in functional:
+                graph.remove((s, p, None))
+            elif p == RDF.type and o == OWL.FunctionalProperty:
+                functional.add(s)
+            graph.add((s, p, o))
 
     def remove(self, triples: Iterable[Triple]) -> None:
         """Remove triples (absent ones are ignored)."""
+        graph = self.graph
         for triple in triples:
-            self.graph.remove(triple)
+            if triple[1] == RDF.type and triple[2] == OWL.FunctionalProperty:
+                self._functional.discard(triple[0])
+            graph.remove(triple)
 
     def is_functional(self, predicate: Node) -> bool:
         """Return True if the view declares `predicate` an owl:FunctionalProperty."""
-        return (predicate, RDF.type, OWL.FunctionalProperty) in self.graph
+        return predicate in self._functional
 
     def value(self, subject: Node | None, predicate: Node) -> Node | None:
         """Return one object of (subject, predicate), or None."""

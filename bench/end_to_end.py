@@ -1,0 +1,357 @@
+"""End to end: from the hw_monitor writing "battery very low" to the robot having acted on it.
+
+Every part is its own process on loopback, as `tspace up` runs them: `tspace serve`
+(router + store), the reasoner, the hw_monitor, the nav_monitor and the behaviour
+agent. The bench writes a charge of 5 % into the space; the hw_monitor adopts it
+and writes the battery level "very low" (the start); the reasoner concludes the
+paper's three things; then each agent that acts on one reports it:
+
+- behaviour: takes up GoingToDock (its changeset with the new `ac:task_started`);
+- nav: applies the low maximum speed (its `ac:speed_limit` 0.3 m/s);
+- hw: touch screen, speakers and microphone are in stand-by (their `ac:actual_mode`).
+
+Latency is from the start to the last of the three, measured with the writers' HLC
+timestamps (Zenoh's, from the wall clock all processes on a host share). The
+simulated drivers switch modes at once here (`--switch-delay 0`): what is measured
+is the software, not a simulated power-up. Each run is undone before the next
+(charge back to 60 %, task back to Idle).
+
+Three rule sets: the project's (rules/selfconfig.rules); the same plus N (default 200)
+rules shaped like the paper's Table 1 rules (bench/rules_scaling.py makes them), which
+the update triggers but which find none of their settings on this robot ("loaded");
+and the same with the settings, so that all N conclude, as in the paper's Table 1, and
+their conclusions travel through the store to every agent ("firing").
+
+Run: python bench/end_to_end.py [--runs 200] [--extra-rules 200] [--no-plot]
+"""
+
+from __future__ import annotations
+
+import argparse
+import queue
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from _harness import OUT, median, percentile, print_table, serve
+from rdflib import Graph, Literal, Namespace
+from rules_scaling import PAPER, paper_rules
+
+from agents.view import View
+from space import Change, TripleSpace
+from space.changeset import hlc_key
+
+ROOT = Path(__file__).resolve().parent.parent
+AC = Namespace("https://w3id.org/tspace/selfconfig#")
+SPACE = "e2e"
+ROBOT, BATTERY, BASE = AC.robot1, AC.robot1_battery, AC.robot1_base
+INTERACTION = (AC.robot1_screen, AC.robot1_speakers, AC.robot1_microphone)
+HW, NAV, BEHAVIOR = "hw_monitor.robot1", "nav_monitor.robot1", "behavior.robot1"
+VERY_LOW = (BATTERY, AC.battery_level, Literal("very low"))
+ACTORS = ("behaviour", "nav", "hw")
+
+
+@dataclass(frozen=True)
+class RuleSet:
+    """The rules the reasoner runs: the project's, plus `extra` paper-shaped ones.
+
+    With `firing`, the robot has each extra rule's setting, so each concludes.
+    """
+
+    extra: int = 0
+    firing: bool = False
+    target: str = ""
+
+    @property
+    def label(self) -> str:
+        """Return the rule set's name in the table."""
+        if not self.extra:
+            return "project"
+        return f"project + {self.extra} {'firing' if self.firing else 'loaded'}"
+
+    @property
+    def settings(self) -> list[object]:
+        """Return the base's properties the extra rules set (when they fire)."""
+        return [AC[f"setting_{i}"] for i in range(self.extra)] if self.firing else []
+
+
+def agent_commands(endpoint: str, rules: list[Path]) -> dict[str, list[str]]:
+    """Return the command line of each agent process of the bench's robot."""
+    common = ["--connect", endpoint, "--space", SPACE, "--robot", "robot1"]
+    reasoner = [arg for path in rules for arg in ("--rules", str(path))]
+    return {
+        "reasoner": ["agents.reasoner", *common, *reasoner],
+        "hw_monitor": ["agents.hw_monitor", *common, "--switch-delay", "0"],
+        # The robot drives to its dock so slowly that it is still on its way after every run.
+        "nav_monitor": ["agents.nav_monitor", *common, "--time-scale", "0.001"],
+        "behavior": ["agents.behavior", *common],
+    }
+
+
+@contextmanager
+def agents(commands: dict[str, list[str]], logs: Path) -> Iterator[None]:
+    """Run the agent processes (stderr to `logs/NAME.log`); stop them all after."""
+    procs: list[subprocess.Popen[bytes]] = []
+    try:
+        for name, argv in commands.items():
+            with open(logs / f"{name}.log", "wb") as log:
+                procs.append(subprocess.Popen([sys.executable, "-m", *argv], cwd=ROOT, stderr=log))
+        yield
+    finally:
+        for proc in procs:
+            proc.terminate()
+        for proc in procs:
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+
+
+def seconds(change: Change) -> float:
+    """Return the wall-clock time of a changeset's HLC timestamp, in seconds."""
+    return hlc_key(change.timestamp)[0] / 2**32
+
+
+@dataclass
+class Run:
+    """One very low battery, followed from the hw_monitor's write to the agents' reports."""
+
+    start: float | None = None
+    start_id: str = ""
+    reasoner: float | None = None
+    acted: dict[str, float] = field(default_factory=dict)
+    standby: dict[object, float] = field(default_factory=dict)
+
+    def feed(self, change: Change) -> None:
+        """Take note of what a changeset of the space says about this run."""
+        added = set(change.added)
+        if self.start is None:
+            if change.agent == HW and VERY_LOW in added:
+                self.start, self.start_id = seconds(change), change.id
+            return
+        if change.agent == "reasoner" and change.cause == self.start_id:
+            self.reasoner = seconds(change)
+        elif change.agent == BEHAVIOR and any(p == AC.task_started for _, p, _ in added):
+            self.acted.setdefault("behaviour", seconds(change))
+        elif change.agent == NAV and any(
+            p == AC.speed_limit and float(o) == 0.3 for s, p, o in added if s == BASE
+        ):
+            self.acted.setdefault("nav", seconds(change))
+        elif change.agent == HW:
+            for device in INTERACTION:
+                if (device, AC.actual_mode, Literal("stand-by")) in added:
+                    self.standby.setdefault(device, seconds(change))
+            if len(self.standby) == len(INTERACTION):
+                self.acted.setdefault("hw", max(self.standby.values()))
+
+    @property
+    def done(self) -> bool:
+        """Return whether all three agents have acted."""
+        return len(self.acted) == len(ACTORS)
+
+    def latencies(self) -> dict[str, float]:
+        """Return ms from the start to the reasoner's answer, to each agent, and to the last."""
+        assert self.start is not None and self.reasoner is not None
+        out = {"reasoner": self.reasoner - self.start}
+        out |= {name: self.acted[name] - self.start for name in ACTORS}
+        out["last"] = max(self.acted.values()) - self.start
+        return {name: value * 1e3 for name, value in out.items()}
+
+
+class Observer:
+    """The bench's copy of the space, kept by a subscription; changes are applied in order."""
+
+    def __init__(self) -> None:
+        self.view = View()
+        self.writers: set[str] = set()
+        self._inbox: queue.SimpleQueue[Change] = queue.SimpleQueue()
+
+    def on_change(self, change: Change) -> None:
+        """Queue a change (called on the space's dispatcher thread: never block there)."""
+        self._inbox.put(change)
+
+    def until(
+        self,
+        condition: Callable[[], bool],
+        what: str,
+        timeout: float = 30.0,
+        run: Run | None = None,
+    ) -> None:
+        """Apply changes (feeding `run`) until `condition()` holds.
+
+        Raises:
+            SystemExit: it did not hold within `timeout` seconds.
+        """
+        deadline = time.monotonic() + timeout
+        while not condition():
+            try:
+                change = self._inbox.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                raise SystemExit(f"end_to_end: no {what} within {timeout:g} s") from None
+            self.view.apply(change)
+            self.writers.add(change.agent)
+            if run is not None:
+                run.feed(change)
+
+    def at_rest(self) -> bool:
+        """Return whether the robot is back where every run starts."""
+        v = self.view
+        return (
+            v.text(BATTERY, AC.battery_level) == "normal"
+            and v.value(ROBOT, AC.current_task) == AC.task_idle
+            and v.value(ROBOT, AC.target_place) is None
+            and v.number(BASE, AC.speed_limit) == 0.7
+            and all(v.text(d, AC.actual_mode) == "active" for d in INTERACTION)
+        )
+
+
+def stage(rule_set: RuleSet) -> Graph:
+    """Return the robot of the paper in a room far from its dock, normal battery."""
+    graph = Graph()
+    for path in ("ontology/selfconfig.ttl", "ontology/robots/hospital.ttl"):
+        graph.parse(ROOT / path)
+    graph.remove((ROBOT, AC.location, None))
+    graph.add((ROBOT, AC.location, AC.therapy_room))
+    graph.add((ROBOT, AC.position_x, Literal(14.0)))
+    graph.add((ROBOT, AC.position_y, Literal(4.0)))
+    for setting in rule_set.settings:
+        graph.add((BASE, setting, Literal("normal")))
+    return graph
+
+
+def measure(runs: int, rule_set: RuleSet, logs: Path) -> list[dict[str, float]]:
+    """Run the robot's processes and time `runs` very low batteries; return their latencies."""
+    rules = [ROOT / "rules" / "selfconfig.rules"]
+    if rule_set.extra:
+        rules.append(logs / "extra.rules")
+        rules[-1].write_text(paper_rules(rule_set.extra))
+    settings = rule_set.settings
+    observer = Observer()
+    with serve() as endpoint, TripleSpace.open(endpoint, space=SPACE, agent="bench") as ts:
+        ts.write(stage(rule_set))
+        ts.subscribe(None, observer.on_change, snapshot=True)
+        with agents(agent_commands(endpoint, rules), logs):
+            observer.until(
+                lambda: {"reasoner", HW, NAV, BEHAVIOR} <= observer.writers and observer.at_rest(),
+                "start of the agents",
+            )
+            results = []
+            for _ in range(runs):
+                run = Run()
+                ts.write([(BATTERY, AC.charge_percent, Literal(5))])
+                observer.until(lambda run=run: run.done, "reaction to very low", run=run)
+                results.append(run.latencies())
+                ts.write([(BATTERY, AC.charge_percent, Literal(60))])
+                observer.until(
+                    lambda: observer.view.text(BATTERY, AC.battery_level) == "normal",
+                    "normal battery",
+                )
+                ts.apply(
+                    [(ROBOT, AC.current_task, AC.task_idle)]
+                    + [(BASE, s, Literal("normal")) for s in settings],
+                    [(ROBOT, AC.current_task, AC.task_going_to_dock)]
+                    + [(BASE, s, Literal("low")) for s in settings],
+                )
+                observer.until(observer.at_rest, "robot back at rest")
+    return results
+
+
+def summary(rule_set: RuleSet, results: list[dict[str, float]]) -> list[object]:
+    """Return one table row: p50 per stage, then p50/p99/max of the last agent, and the paper."""
+    last = [r["last"] for r in results]
+    return [
+        rule_set.label,
+        len(results),
+        *(median([r[name] for r in results]) for name in ("reasoner", *ACTORS)),
+        median(last),
+        percentile(last, 99),
+        max(last),
+        rule_set.target,
+        PAPER[max(1, rule_set.extra)] * 1e3,
+    ]
+
+
+def plot(all_results: dict[RuleSet, list[dict[str, float]]]) -> Path:
+    """Draw the distribution of the last agent's latency per rule set, with the paper's."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    OUT.mkdir(parents=True, exist_ok=True)
+    figure, axis = plt.subplots(figsize=(7, 4.5))
+    for rule_set, results in all_results.items():
+        values = sorted(r["last"] for r in results)
+        share = [(i + 1) / len(values) for i in range(len(values))]
+        axis.step(values, share, where="post", label=f"tspace, {rule_set.label}")
+    for rules in (1, max(1, *(r.extra for r in all_results))):
+        axis.axvline(PAPER[rules] * 1e3, linestyle="--", color="grey")
+        axis.annotate(
+            f"paper (Jena), {rules} rule{'s' * (rules > 1)}",
+            (PAPER[rules] * 1e3, 0.05),
+            rotation=90,
+        )
+    axis.set_xscale("log")
+    axis.set_xlabel('"battery very low" written -> last agent acted (ms, log)')
+    axis.set_ylabel("share of runs")
+    axis.set_title("End to end, separate processes on loopback")
+    axis.grid(True, which="both", alpha=0.3)
+    axis.legend(loc="center right")
+    path = OUT / "end_to_end.png"
+    figure.savefig(path, dpi=120, bbox_inches="tight")
+    return path
+
+
+def main(runs: int, extra: int, draw: bool) -> None:
+    rule_sets = [
+        RuleSet(target="p50 <= 10, p99 <= 30"),
+        RuleSet(extra, target="p50 <= 15"),
+        RuleSet(extra, firing=True),
+    ]
+    all_results = {}
+    with tempfile.TemporaryDirectory(prefix="tspace-e2e-") as tmp:
+        for index, rule_set in enumerate(rule_sets):
+            logs = Path(tmp) / str(index)
+            logs.mkdir()
+            all_results[rule_set] = measure(runs, rule_set, logs)
+    print_table(
+        '"battery very low" written by hw_monitor -> acted on by behaviour, nav and hw '
+        f"(ms, {runs} runs; p50 = median over runs)",
+        [
+            "rules",
+            "runs",
+            "reasoner p50",
+            "behaviour p50",
+            "nav p50",
+            "hw p50",
+            "last p50",
+            "last p99",
+            "last max",
+            "target",
+            "paper",
+        ],
+        [summary(rule_set, results) for rule_set, results in all_results.items()],
+    )
+    if draw:
+        print(f"plot: {plot(all_results)}")
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=200, help="very low batteries per rule set")
+    parser.add_argument(
+        "--extra-rules",
+        type=int,
+        default=200,
+        metavar="N",
+        help="paper-shaped rules beside the project's (default 200)",
+    )
+    parser.add_argument("--no-plot", action="store_true", help="skip the PNG")
+    options = parser.parse_args()
+    main(options.runs, options.extra_rules, not options.no_plot)
