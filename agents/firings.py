@@ -38,6 +38,7 @@ class FiringLog:
         self.next = 1
         self._records: deque[list[Triple]] = deque()
         self._answering: tuple[str, Node] | None = None
+        self._named: set[str] = set()  # the rule names of the record being answered
 
     def restore(self, triples: Iterable[Triple]) -> None:
         """Take back this log's records from the space (after a restart), numbering after them."""
@@ -62,13 +63,15 @@ class FiringLog:
         A firing with the same cause and robot as the last one joins its record.
         """
         if cause and self._records and self._answering == (cause, robot):
+            if rule in self._named:
+                return [], []
+            self._named.add(rule)
             record = self._records[-1]
             name = (record[0][0], AC.rule_name, Literal(rule))
-            if name in record:
-                return [], []
             record.append(name)
             return [name], []
         self._answering = (cause, robot) if cause else None
+        self._named = {rule}
         iri = URIRef(f"{self.prefix}{self.next}")
         triples: list[Triple] = [
             (iri, RDF.type, AC.RuleFiring),
