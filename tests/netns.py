@@ -37,8 +37,6 @@ from contextlib import contextmanager
 from pathlib import Path
 from types import TracebackType
 
-import pytest
-
 from space import SpaceError, TripleSpace
 
 REPO = Path(__file__).resolve().parents[1]
@@ -65,6 +63,8 @@ def netns_unavailable() -> str | None:
 
 def require_netns() -> None:
     """Skip the calling test with the reason when namespaces cannot be made."""
+    import pytest  # here: benchmarks use this module without pytest installed
+
     reason = netns_unavailable()
     if reason is not None:
         pytest.skip(reason)
@@ -221,12 +221,17 @@ class Network:
         names: the hosts' short names (addresses `10.47.0.2`, `.3`, ... in that order).
         workdir: where logs, data directories and control sockets go (keep the
             path short: Unix socket paths are limited to 107 bytes).
+        sysctls: kernel settings of every host's network stack, e.g.
+            `{"net.ipv4.tcp_rto_max_ms": "1000"}` (see docs/deployment.md).
     """
 
-    def __init__(self, names: Sequence[str], workdir: Path) -> None:
+    def __init__(
+        self, names: Sequence[str], workdir: Path, sysctls: dict[str, str] | None = None
+    ) -> None:
         self.token = f"ts{uuid.uuid4().hex[:8]}"
         self.hub = f"{self.token}-hub"
         self.workdir = workdir
+        self.sysctls = dict(sysctls or {})
         self.hosts = {name: Host(self, name, i) for i, name in enumerate(names)}
         self._made: list[str] = []
 
@@ -258,6 +263,8 @@ class Network:
         for host in self.hosts.values():
             self._add_netns(host.netns)
             _ip("-n", host.netns, "link", "set", "lo", "up")
+            for key, value in self.sysctls.items():
+                _ip("netns", "exec", host.netns, "sysctl", "-q", "-w", f"{key}={value}")
             self._attach(host)
 
     def _add_netns(self, name: str) -> None:
