@@ -9,6 +9,7 @@ dispatcher thread, where they are fine).
 from __future__ import annotations
 
 import io
+import logging
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from types import TracebackType
@@ -18,14 +19,16 @@ from rdflib import Graph, URIRef
 from rdflib.query import Result
 
 from space import keys
-from space.changeset import Changeset, pack
-from space.errors import QueryError, TemplateError
+from space.changeset import Changeset, pack, unpack
+from space.errors import MalformedPayload, QueryError, TemplateError
 from space.prefixes import PrefixMap
 from space.request import ask_store
 from space.session import open_session
 from space.subscription import Callback, Change, Dispatcher, Subscription
 from space.template import Template
 from space.terms import Triple, triple_from_nt
+
+log = logging.getLogger("tspace.client")
 
 TemplateLike = Template | tuple | str | None
 Triples = Iterable[Triple] | Graph
@@ -55,7 +58,7 @@ class TripleSpace:
         self._owns_session = _owns_session
         self._dispatcher = Dispatcher(self._fetch_log)
         self._subscriptions: set[Subscription] = set()
-        self._reconnections: zenoh.TransportEventsListener | None = None
+        self._watchdogs: list = []
 
     @classmethod
     def open(
@@ -82,9 +85,9 @@ class TripleSpace:
         for sub in list(self._subscriptions):
             sub.close()
         self._subscriptions.clear()
-        if self._reconnections is not None:
-            self._reconnections.undeclare()
-            self._reconnections = None
+        for watchdog in self._watchdogs:
+            watchdog.undeclare()
+        self._watchdogs = []
         self._dispatcher.close()
         if self._owns_session:
             self.session.close()
@@ -288,11 +291,13 @@ class TripleSpace:
             SpaceUnavailable: no store answered (the sequence number is needed to fill gaps).
         """
         t = self._template(template)
-        if self._reconnections is None:
-            # after a link comes back, changes published meanwhile are fetched from the log
-            self._reconnections = self.session.info.declare_transport_events_listener(
-                self._on_transport
-            )
+        if not self._watchdogs:
+            # Changes missed while a link was down are fetched from the store's log when this
+            # session reconnects, or when the store's heartbeat shows a later sequence number.
+            self._watchdogs = [
+                self.session.info.declare_transport_events_listener(self._on_transport),
+                self.session.declare_subscriber(self._key("seq"), self._on_heartbeat),
+            ]
         sub = Subscription(self._dispatcher, t, callback)
         self._dispatcher.add(sub)
         sub.attach(
@@ -318,7 +323,16 @@ class TripleSpace:
 
     def _on_transport(self, event: zenoh.TransportEvent) -> None:
         if event.kind == zenoh.SampleKind.PUT:
-            self._dispatcher.resync()
+            self._dispatcher.catch_up()
+
+    def _on_heartbeat(self, sample: zenoh.Sample) -> None:
+        try:
+            beat = unpack(sample.payload.to_bytes())
+            seq = int(beat["seq"])  # type: ignore[index]
+        except (MalformedPayload, TypeError, KeyError, ValueError):
+            log.warning("malformed heartbeat on %s skipped", sample.key_expr)
+            return
+        self._dispatcher.catch_up(seq)
 
     def unsubscribe(self, sub: Subscription) -> None:
         """Stop a subscription."""

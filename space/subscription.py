@@ -90,15 +90,21 @@ Fetch = Callable[[int, int], list[bytes]]
 _LATEST = 2**62  # "up to the store's current sequence number" in a log request
 
 
+@dataclass(frozen=True)
+class _Behind:
+    """A queued marker: the store is at `seq`; fetch what is missing up to it."""
+
+    seq: int
+
+
 class Dispatcher:
     """The thread that delivers changes to every subscription of one `TripleSpace`."""
 
     def __init__(self, fetch_log: Fetch) -> None:
         self._fetch_log = fetch_log
-        self._queue: queue.SimpleQueue[tuple[Subscription, bytes | None] | None] = (
+        self._queue: queue.SimpleQueue[tuple[Subscription, bytes | _Behind | None] | None] = (
             queue.SimpleQueue()
         )
-        self._resync = b""  # the queued marker: catch up with the store's log
         self._subs: set[Subscription] = set()
         self._thread = threading.Thread(target=self._run, name="tspace-dispatch", daemon=True)
         self._started = False
@@ -129,15 +135,17 @@ class Dispatcher:
         sub.initial = initial
         self._queue.put((sub, None))
 
-    def resync(self) -> None:
-        """Make every subscription fetch what it missed (after a reconnection).
+    def catch_up(self, seq: int = _LATEST) -> None:
+        """Make every subscription fetch what it missed up to `seq` from the store's log.
 
-        Safe to call from a Zenoh callback: it only enqueues.
+        Called on a reconnection and on the store's heartbeat (its current
+        sequence number), so a change missed during a cut arrives even when no
+        later change follows it. Safe in a Zenoh callback: it only enqueues.
         """
         with self._lock:
             subs = list(self._subs)
         for sub in subs:
-            self._queue.put((sub, self._resync))
+            self._queue.put((sub, _Behind(seq)))
 
     def forget(self, sub: Subscription) -> None:
         """Stop delivering to a subscription."""
@@ -168,9 +176,9 @@ class Dispatcher:
                 early, sub.early = sub.early, []
                 for entry in early:
                     self._process(sub, entry)
-            elif payload is self._resync:
-                if sub.ready:
-                    self._fill_gap(sub, _LATEST)
+            elif isinstance(payload, _Behind):
+                if sub.ready and payload.seq > sub.last_seq:
+                    self._fill_gap(sub, payload.seq)
             elif not sub.ready:
                 sub.early.append(payload)
             else:

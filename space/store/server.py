@@ -35,6 +35,7 @@ from space.store.state import SpaceState
 log = logging.getLogger("tspace.store")
 
 _BATCH = 256
+HEARTBEAT = 0.5  # seconds between publications of each space's sequence number
 _SERVICES = ("write", "query", "log", "keys")
 
 
@@ -159,10 +160,16 @@ class StoreServer:
     def _run(self) -> None:
         self._decide_role()
         self._ready.set()
+        next_beat = time.monotonic()
         while True:
+            if time.monotonic() >= next_beat:
+                self._heartbeat()
+                next_beat = time.monotonic() + HEARTBEAT
             batch: list[_Request] = []
+            wait = next_beat - time.monotonic()
+            held = self._acks.wait_time()
             try:
-                item = self._queue.get(timeout=self._acks.wait_time())
+                item = self._queue.get(timeout=max(0.0, wait if held is None else min(wait, held)))
             except queue.Empty:
                 item = _Request("tick", "", None)
             while item is not None:
@@ -243,6 +250,14 @@ class StoreServer:
             for t in added:
                 key = keys.triple_key(state.name, graph, t, state.prefixes, self.root)
                 s.put(key, meta, congestion_control=block)
+
+    def _heartbeat(self) -> None:
+        """Publish each space's sequence number, so subscribers learn of changes they missed."""
+        if self.role != "leading":
+            return
+        for name, state in self._spaces.items():
+            if state.seq:
+                self.session.put(keys.service_key(name, "seq", self.root), pack({"seq": state.seq}))
 
     def _other(self, req: _Request) -> None:
         if req.kind == "peer":
