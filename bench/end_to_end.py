@@ -302,7 +302,7 @@ def plot(all_results: dict[RuleSet, list[dict[str, float]]]) -> Path:
     axis.set_ylabel("share of runs")
     axis.set_title("End to end, separate processes on loopback")
     axis.grid(True, which="both", alpha=0.3)
-    axis.legend(loc="center right")
+    axis.legend(loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=2, fontsize="small")
     path = OUT / "end_to_end.png"
     figure.savefig(path, dpi=120, bbox_inches="tight")
     return path
