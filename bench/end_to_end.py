@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from _harness import OUT, median, percentile, print_table, serve
-from rdflib import Graph, Literal, Namespace
+from rdflib import Graph, Literal, Namespace, URIRef
 from rules_scaling import PAPER, paper_rules
 
 from agents.view import View
@@ -75,7 +75,7 @@ class RuleSet:
         return f"project + {self.extra} {'firing' if self.firing else 'loaded'}"
 
     @property
-    def settings(self) -> list[object]:
+    def settings(self) -> list[URIRef]:
         """Return the base's properties the extra rules set (when they fire)."""
         return [AC[f"setting_{i}"] for i in range(self.extra)] if self.firing else []
 
