@@ -1,27 +1,46 @@
-"""Which robot a change is about, so that a reasoner per robot answers for its own robot.
+"""Which per-robot reasoner answers a change, so that each change gets one whole answer.
 
-A robot owns itself, its devices and its skills. Every per-robot reasoner
-applies every changeset, so all of them hold the same state and draw the same
-conclusions; ownership only decides who writes them. A changeset about one
-robot's things is answered whole by that robot's reasoner: a dock it releases
-and another robot claims in the same breath is then written in one changeset,
-never as two halves racing each other. A changeset about no robot (a place, a
-person, a dock) or about several is shared: each reasoner writes the firings
-and inferred triples about its own robot, and those about no robot (the same
-for all, so writing them twice changes nothing).
+With `--per-robot`, every robot has a reasoner named `reasoner.ROBOT`. All of
+them apply every changeset in the store's order, so all hold the same state
+and draw the same conclusions; one writes them, whole, in one changeset.
+Writing whole keeps every engine equal to the space: split by robot, a dock
+released by one robot and claimed by another would arrive as two halves, in
+either order.
+
+A reasoner joins once it subscribed to the changes and before it reads the
+space, with a liveliness token `tspace/<space>/@reasoners/<join time>-<name>`.
+A robot owns itself, its devices and its skills: a change about one robot's
+things is answered by that robot's reasoner if it has joined. Any other change
+(about no robot or several, or about a robot without a reasoner) is answered
+by the leader: the reasoner that joined first. The leader also writes what
+loading the space concluded; those joining later find it done. While a
+reasoner joins or leaves, a change may be answered twice (the second answer
+changes nothing), never not at all: whoever joined already queues every
+change it has not read.
 """
 
 from __future__ import annotations
 
+import threading
+import time
 from collections.abc import Iterable
-from dataclasses import dataclass
 
+import zenoh
 from rdflib import RDF
 from rdflib.term import Node
 
+from agents.base import local_name
 from agents.view import AC
-from space.reasoning import Delta, Firing, RuleEngine
+from space import keys
+from space.reasoning import Firing, RuleEngine
 from space.terms import Triple
+
+PREFIX = "reasoner."
+
+
+def reasoner_name(robot: Node) -> str:
+    """Return the name of a robot's own reasoner."""
+    return PREFIX + local_name(robot)  # type: ignore[arg-type]
 
 
 def owner(engine: RuleEngine, subject: Node) -> Node | None:
@@ -48,55 +67,52 @@ def firing_robot(engine: RuleEngine, firing: Firing) -> Node | None:
     return None
 
 
-@dataclass(frozen=True)
-class Answer:
-    """What a reasoner writes back for one change: asserted and inferred changes, firings."""
+def _roster_key(space: str, entry: str = "*") -> str:
+    return f"{keys.ROOT}/{space}/@reasoners/{entry}"
 
-    added: tuple[Triple, ...]
-    removed: tuple[Triple, ...]
-    inferred_added: tuple[Triple, ...]
-    inferred_removed: tuple[Triple, ...]
-    firings: tuple[Firing, ...]
 
-    @classmethod
-    def of(cls, delta: Delta) -> Answer:
-        """Return the whole answer to a delta."""
-        return cls(
-            delta.asserted_added,
-            delta.asserted_removed,
-            delta.inferred_added,
-            delta.inferred_removed,
-            delta.firings,
+class Roster:
+    """The per-robot reasoners of a space, in the order they joined.
+
+    `watch` feeds it from a liveliness subscriber (on a Zenoh thread); the
+    agent's thread reads it. Every method takes a lock and never blocks otherwise.
+
+    Args:
+        me: this reasoner's name.
+    """
+
+    def __init__(self, me: str) -> None:
+        self.me = me
+        self._joined: dict[str, int] = {}
+        self._lock = threading.Lock()
+
+    def watch(self, session: zenoh.Session, space: str) -> zenoh.Subscriber:
+        """Follow the reasoners' tokens (those present now first); the caller owns it."""
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            stamp, _, name = str(sample.key_expr).rsplit("/", 1)[1].partition("-")
+            with self._lock:
+                if sample.kind == zenoh.SampleKind.PUT and stamp.isdigit():
+                    self._joined[keys.unescape(name)] = int(stamp)
+                else:
+                    self._joined.pop(keys.unescape(name), None)
+
+        return session.liveliness().declare_subscriber(_roster_key(space), on_sample, history=True)
+
+    def join(self, session: zenoh.Session, space: str) -> zenoh.LivelinessToken:
+        """Declare that this reasoner answers from now on; the caller owns the token."""
+        stamp = time.time_ns()
+        with self._lock:
+            self._joined[self.me] = stamp
+        return session.liveliness().declare_token(
+            _roster_key(space, f"{stamp}-{keys.escape(self.me)}")
         )
 
-    def share(self, engine: RuleEngine, robot: Node) -> Answer:
-        """Return the part of this answer a reasoner for `robot` writes for a shared change.
-
-        Firings count for the robot among their premises; their asserted changes
-        are composed in firing order. Inferred triples go with their subject's robot.
-        """
-        firings = tuple(f for f in self.firings if firing_robot(engine, f) in (robot, None))
-        added: dict[Triple, None] = {}
-        removed: dict[Triple, None] = {}
-        for firing in firings:
-            for triple in firing.retracted:
-                if triple in added:
-                    del added[triple]
-                else:
-                    removed[triple] = None
-            for triple in firing.asserted:
-                if triple in removed:
-                    del removed[triple]
-                else:
-                    added[triple] = None
-
-        def mine(triples: tuple[Triple, ...]) -> tuple[Triple, ...]:
-            return tuple(t for t in triples if owner(engine, t[0]) in (robot, None))
-
-        return Answer(
-            tuple(added),
-            tuple(removed),
-            mine(self.inferred_added),
-            mine(self.inferred_removed),
-            firings,
-        )
+    def answers(self, robot: Node | None) -> bool:
+        """Return True if this reasoner answers a change about `robot` (None: shared)."""
+        with self._lock:
+            joined = dict(self._joined)
+        if robot is not None and reasoner_name(robot) in joined:
+            return reasoner_name(robot) == self.me
+        leader = min(joined, key=lambda name: (joined[name], name), default=self.me)
+        return leader == self.me

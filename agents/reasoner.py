@@ -9,9 +9,9 @@ restart; a broken one is logged with its line and column and the rules in
 force stay. On start it writes the ontology (and `--robot-file`) into the
 space when the space does not have them yet.
 
-One reasoner serves a whole fleet. With `--per-robot`, one per robot instead:
-each applies every change but writes only what `agents.ownership` gives its
-robot, so a robot's reasoner can run on the robot.
+One reasoner serves a whole fleet. With `--per-robot`, one per robot instead
+(a robot's reasoner can run on the robot): each applies every change, and
+`agents.ownership` says which one writes the answer.
 """
 
 from __future__ import annotations
@@ -21,15 +21,15 @@ import logging
 import os
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 
+import zenoh
 from rdflib import OWL, RDF, URIRef
 from rdflib.term import Node
 
 from agents.base import Agent, local_name, run_agent
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
-from agents.ownership import Answer, concerned_robot, firing_robot
+from agents.ownership import PREFIX, Roster, concerned_robot, firing_robot
 from agents.view import AC
 from space import Change, Subscription
 from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
@@ -56,6 +56,9 @@ class Reasoner(Agent):
             prefix += f"{local_name(self.robot)}_"
         self.engine: RuleEngine | None = None
         self.firings = FiringLog(args.keep_firings, prefix)
+        self.roster = Roster(self.name) if args.per_robot else None
+        self._others: zenoh.Subscriber | None = None
+        self._joined: zenoh.LivelinessToken | None = None
         self._mtimes: dict[Path, float] = {}
         self._checked = 0.0
 
@@ -92,7 +95,7 @@ class Reasoner(Agent):
         parser.add_argument(
             "--per-robot",
             action="store_true",
-            help="answer for --robot only, beside one such reasoner per robot (agents.ownership)",
+            help="one reasoner per robot: answer for --robot (see agents.ownership)",
         )
 
     @property
@@ -114,8 +117,14 @@ class Reasoner(Agent):
         load; applying a change the loaded state already reflects changes nothing.
         """
         assert self.ts is not None
+        if self.roster is not None and self._others is None:
+            # Declared first: the reasoners present now are known once the engine is built.
+            self._others = self.roster.watch(self.ts.session, self.ts.space)
         engine = self._build()
         subscription = self.ts.subscribe(None, self._inbox.put, timeout=self.args.timeout)
+        if self.roster is not None and self._joined is None:
+            # Subscribed, then joined, then reading: no change falls between two reasoners.
+            self._joined = self.roster.join(self.ts.session, self.ts.space)
         try:
             self._seed()
             asserted = set(self.ts.query(None, graph="asserted", timeout=self.args.timeout))
@@ -128,8 +137,22 @@ class Reasoner(Agent):
         self.engine = engine
         self.started = True
         self.log.info("loaded %d rules over %d asserted triples", len(engine.rules), len(asserted))
-        self._write(self._reconciled(delta, inferred), None)
+        if self.roster is None or self.roster.answers(None):
+            self._write(delta, None, inferred_before=inferred)
+        else:
+            self.log.info("another per-robot reasoner leads: it concludes the load")
         return subscription
+
+    def shutdown(self) -> None:
+        """Withdraw from the per-robot reasoners, then leave the space."""
+        try:
+            if self._joined is not None:
+                self._joined.undeclare()
+            if self._others is not None:
+                self._others.undeclare()
+        finally:
+            self._joined, self._others = None, None
+            super().shutdown()
 
     def _build(self) -> RuleEngine:
         """Return an engine for the rules and ontology files, remembering their mtimes.
@@ -162,19 +185,13 @@ class Reasoner(Agent):
         removed += self._replaced(added, removed)
         if not added and not removed:
             return
-        answer = Answer.of(self.engine.apply(added=added, removed=removed))
-        if self.args.per_robot:
-            robot = concerned_robot(self.engine, [*added, *removed])
-            if robot is None:
-                answer = self._shared(answer)
-            elif robot != self.robot:
-                return  # that robot's reasoner answers, having drawn the same conclusions
-        self._write(answer, change.id)
-
-    def _shared(self, answer: Answer) -> Answer:
-        """Return the part of an answer to a shared change this reasoner writes."""
-        assert self.engine is not None
-        return answer.share(self.engine, self.robot) if self.args.per_robot else answer
+        delta = self.engine.apply(added=added, removed=removed)
+        if self.roster is not None:
+            if change.agent.startswith(PREFIX):
+                return  # another reasoner's answer: this engine concluded the same
+            if not self.roster.answers(concerned_robot(self.engine, [*added, *removed])):
+                return  # another reasoner answers, having drawn the same conclusions
+        self._write(delta, change.id)
 
     def _replaced(self, added: list[Triple], removed: list[Triple]) -> list[Triple]:
         """Return the old values of functional properties that `added` replaces.
@@ -189,27 +206,20 @@ class Reasoner(Agent):
                 out += [t for t in engine.match(s, p) if t[2] != o and t not in removed]
         return out
 
-    def _reconciled(self, delta: Delta, inferred_before: set[Triple]) -> Answer:
-        """Return the answer to a (re)load of the engine.
-
-        Its inferred changes turn what the space's inferred graph held
-        (`inferred_before`) into what the engine infers now.
-        """
-        assert self.engine is not None
-        now = set(self.engine.triples(Origin.INFERRED))
-        answer = replace(
-            Answer.of(delta),
-            inferred_added=tuple(now - inferred_before),
-            inferred_removed=tuple(inferred_before - now),
-        )
-        return self._shared(answer)
-
-    def _write(self, answer: Answer, cause: str | None) -> None:
-        """Write an answer (and its firing records) to the space as one changeset."""
+    def _write(
+        self, delta: Delta, cause: str | None, *, inferred_before: set[Triple] | None = None
+    ) -> None:
+        """Write a delta (and its firing records) to the space as one changeset."""
         assert self.ts is not None and self.engine is not None
-        inferred_added, inferred_removed = answer.inferred_added, answer.inferred_removed
-        added, removed = list(answer.added), list(answer.removed)
-        for firing in answer.firings:
+        inferred_added, inferred_removed = list(delta.inferred_added), list(delta.inferred_removed)
+        if inferred_before is not None:
+            now = set(self.engine.triples(Origin.INFERRED))
+            inferred_added, inferred_removed = (
+                list(now - inferred_before),
+                list(inferred_before - now),
+            )
+        added, removed = list(delta.asserted_added), list(delta.asserted_removed)
+        for firing in delta.firings:
             self.log.info("fired %s (cause %s)", firing.rule, cause)
             new, old = self.firings.record(firing.rule, cause, self._robot_of(firing))
             added += new
@@ -260,7 +270,8 @@ class Reasoner(Agent):
             return
         self.engine = engine
         self.log.info("rules reloaded: %d rules", len(engine.rules))
-        self._write(self._reconciled(delta, inferred_before), None)
+        if self.roster is None or self.roster.answers(None):
+            self._write(delta, None, inferred_before=inferred_before)
 
 
 def _mtime(path: Path) -> float:

@@ -1,16 +1,20 @@
 """Benchmark a fleet sharing one space: latency against fleet size, sustained load, recovery.
 
-Run: python bench/fleet.py [--runs 3] [--seconds 60] [--no-recovery] [--no-plot]
+Run: python bench/fleet.py [--runs 3] [--seconds 60] [--cut-hz 1 10] [--no-recovery] [--no-plot]
 
 1. Update latency: a robot's battery turns "very low" (or back to "normal"), and
    the time until the reasoner's conclusions are applied by the store, for
-   fleets of 1, 10, 25 and 50 robots (`agents.sim.fleet`, `rules/fleet.rules`).
+   fleets of 1, 10, 25 and 50 robots (`agents.sim.fleet`, `rules/fleet.rules`),
+   one change at a time, after every robot went through two such cycles.
 2. Sustained load: 50 robots each writing a sensor change at 10 Hz for
    `--seconds`; every 20th change of a robot is a battery change the rules
    answer. Latency of those answers, changes lost, the reasoner's RSS.
 3. Recovery (root only): store on host a, robots' writes through host b, the
-   reasoner on host c (`tests/netns.py`); c's link is cut for 5 s under load;
-   the time from restoring it until c and the reasoner have caught up.
+   reasoner on host c (`tests/netns.py`); c's link is cut for 5 s while the
+   fleet writes at `--cut-hz` per robot; the time from restoring the link until
+   c has every change published before and the reasoner has answered every
+   battery change written before. With the kernel's TCP defaults, and with
+   `net.ipv4.tcp_rto_max_ms=1000` on every host where the kernel has it.
 
 The reasoner is the real `python -m agents.reasoner` process; one process plays
 every robot's sensors through the library (what a robot's hw_monitor does), and
@@ -37,7 +41,10 @@ sys.path.insert(0, str(REPO / "tests"))  # the network-namespace harness
 from netns import Network, netns_unavailable
 
 SIZES = (1, 10, 25, 50)
-WARMUP = 5  # battery changes not counted, while caches fill
+# Battery cycles (very low, normal) of every robot not counted: a robot's first "very low"
+# sends it to a dock, a bigger answer than the ones after, so the changes measured are of
+# the same kind whatever the fleet's size.
+WARMUP_CYCLES = 2
 
 
 def update_latency(count: int, samples: int, log: Path) -> list[float]:
@@ -52,11 +59,12 @@ def update_latency(count: int, samples: int, log: Path) -> list[float]:
             obs.wait_answer()
             fleet = Fleet(ts, site, count)
             latencies = []
-            for i in range(WARMUP + samples):
+            warmup = WARMUP_CYCLES * 2 * count
+            for i in range(warmup + samples):
                 cid = fleet.battery(i % count)
                 if not obs.wait(lambda: cid in obs.answered, 10):  # noqa: B023
                     raise TimeoutError(f"no answer to battery change {i} of {count} robots")
-                if i >= WARMUP:
+                if i >= warmup:
                     latencies.append(obs.answered[cid] - fleet.sent[cid])
             return latencies
         finally:

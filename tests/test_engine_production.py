@@ -41,6 +41,19 @@ def test_drop_replaces_a_triple_and_the_delta_says_so():
     assert why.asserted and why.rule == "off_when_low"
 
 
+def test_a_callers_triple_that_rules_take_away_is_reported_removed():
+    """Loading a state whose rules drop part of it: the reasoner must remove it from the space."""
+    e = engine(SWITCH)
+    delta = e.load([(EX.d, EX.battery, Literal("low")), (EX.d, EX.mode, Literal("on"))])
+    assert set(e.graph.objects(EX.d, EX.mode)) == {Literal("off")}
+    assert delta.asserted_removed == ((EX.d, EX.mode, Literal("on")),)
+    assert delta.asserted_added == ((EX.d, EX.mode, Literal("off")),)
+    delta = e.apply(
+        added=[(EX.d, EX.mode, Literal("on"))], removed=[(EX.d, EX.mode, Literal("off"))]
+    )
+    assert delta.asserted_removed == ((EX.d, EX.mode, Literal("on")),)
+
+
 def test_rules_fire_again_when_their_match_comes_back():
     e = engine(SWITCH)
     e.load([(EX.d, EX.battery, Literal("ok")), (EX.d, EX.mode, Literal("on"))])

@@ -238,12 +238,6 @@ def test_a_robot_whose_host_vanishes_is_gone_and_its_patient_handed_over(net):
         assert attending in answer.removed
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a subscription behind a router whose link to the store's router was dropped "
-    "(a cut longer than the lease) learns what it missed only from the next change; "
-    "space/client.py resyncs on its own session's reconnections, not its router's",
-)
 def test_changes_written_during_a_cut_longer_than_the_lease_arrive(net):
     b, c = net["b"], net["c"]
     space = f"mh{uuid.uuid4().hex[:8]}"

@@ -49,14 +49,18 @@ class ChangeLog:
             if t[2] in functors:
                 continue
             is_present, is_asserted = t in triples, t in asserted
-            if is_present == was_present and is_asserted == was_asserted:
+            # Checked before the net change: a caller's triple that rules took
+            # away in the same update (a loaded one, say) is no net change, but
+            # the caller must be told, or it keeps the triple.
+            by_rule = is_asserted != self._expected.get(t, was_asserted)
+            if is_present == was_present and is_asserted == was_asserted and not by_rule:
                 continue
             triple = decode(t)
             if is_present != was_present:
                 now = is_asserted if is_present else was_asserted
                 change = Change(triple, Origin.ASSERTED if now else Origin.INFERRED)
                 (added if is_present else removed).append(change)
-            if is_asserted != self._expected.get(t, was_asserted):
+            if by_rule:
                 by_rules[0 if is_asserted else 1].append(triple)
             was_inferred = was_present and not was_asserted
             if (is_present and not is_asserted) != was_inferred:
