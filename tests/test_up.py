@@ -114,3 +114,67 @@ def test_a_broken_launch_file_is_reported_in_one_line(tmp_path):
     assert result.stderr.strip().splitlines() == [
         "tspace up: every [[agent]] needs a name: {'module': 'agents.hmi'}"
     ]
+
+
+def post(port: int, path: str, body: dict) -> dict:
+    request = urllib.request.Request(
+        f"http://127.0.0.1:{port}{path}",
+        data=json.dumps(body).encode(),
+        headers={"Content-Type": "application/json"},
+    )
+    with urllib.request.urlopen(request, timeout=10) as reply:
+        return json.load(reply)
+
+
+def robots_shown(port: int) -> dict[str, dict]:
+    try:
+        return {r["name"]: r for r in hmi_state(port)["robots"]}
+    except OSError:
+        return {}
+
+
+@pytest.mark.parametrize("reasoners", ["one for the fleet", "one per robot"])
+def test_the_fleet_launch_file_commands_only_the_robot_whose_battery_is_low(tmp_path, reasoners):
+    """deploy/fleet.toml as shipped, and with its documented per-robot reasoner variant."""
+    text = (REPO / "deploy" / "fleet.toml").read_text().replace('"../', f'"{REPO}/')
+    if reasoners == "one per robot":
+        reasoner = '[[agent]]\nname = "reasoner"\nargs = ['
+        assert reasoner in text
+        text = text.replace(
+            reasoner, '[[agent]]\nname = "reasoner"\nper_robot = true\nargs = ["--per-robot", '
+        )
+    launch = tmp_path / "fleet.toml"
+    launch.write_text(text)
+    with Up(tmp_path, launch) as up:
+        up.wait_started()
+        names = {"robot1", "robot2", "guide1"}
+        wait_for(lambda: set(robots_shown(up.hmi_port)) == names, 30, "the HMI showing the fleet")
+        # Every robot's devices are active before the battery of one of them runs low.
+        wait_for(
+            lambda: all(
+                d["mode"] == "active"
+                for r in robots_shown(up.hmi_port).values()
+                for d in r["devices"]
+            ),
+            30,
+            "every device active",
+        )
+        post(up.hmi_port, "/api/battery", {"robot": "robot2", "level": "very low"})
+
+        def robot2_heading_to_dock() -> dict | None:
+            robots = robots_shown(up.hmi_port)
+            robot2 = robots.get("robot2", {})
+            return (
+                robots
+                if robot2.get("task_type") == "GoingToDock" and robot2.get("speed") == "low"
+                else None
+            )
+
+        robots = wait_for(robot2_heading_to_dock, 30, "robot2 heading to a dock at low speed")
+        for other in ("robot1", "guide1"):
+            assert robots[other]["task_type"] == "Idle", robots[other]
+            assert robots[other]["speed"] == "normal", robots[other]
+        expected = 13 if reasoners == "one for the fleet" else 15  # serve + agents
+        assert len(up.track()) == expected, up.logs()
+        up.proc.send_signal(signal.SIGINT)
+        assert up.proc.wait(timeout=30) == 0, up.logs()
