@@ -23,6 +23,7 @@ def open_server(
     data_dir: Path | None = None,
     *,
     durable: bool = False,
+    log_keep: int = 100_000,
     config_file: str | None = None,
     connect: list[str] | None = None,
     store: bool = True,
@@ -39,6 +40,7 @@ def open_server(
             session,
             data_dir or default_data_dir(),
             durable=durable,
+            log_keep=log_keep,
             look_for_leader=2.0 if connect else 0.0,
         )
         if store:

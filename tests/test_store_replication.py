@@ -67,3 +67,55 @@ def test_subscriber_keeps_its_order_across_a_failover(tmp_path):
     finally:
         b.stop()
         a.stop()
+
+
+def test_a_store_away_longer_than_the_log_copies_the_space_whole(tmp_path):
+    a = Server(tmp_path / "a", "--log-keep", "10")
+    a.start()
+    b = Server(tmp_path / "b", "--connect", a.endpoint)
+    b.start()
+    wait_for(lambda: "follows" in b.logs(), 10, "the second store to follow the first")
+    try:
+        with TripleSpace.open(a.endpoint, space="rep") as ts:
+            ts.write([(AC.counter, AC.n, Literal(0))])
+            b.stop(signal.SIGKILL)
+            # The leader trims its log every 1,000 changesets, to the last 10.
+            for i in range(1, 1100):
+                ts.write_nowait([(AC.counter, AC.n, Literal(i))])
+            ts.write([(AC.counter, AC.n, Literal(1100))], timeout=30)
+        b.start()
+        wait_for(lambda: "copied whole" in b.logs(), 20, "the returning store to copy the space")
+        a.stop(signal.SIGKILL)
+        wait_for(lambda: store_answers(b.endpoint), 20, "the returning store to take over")
+        with TripleSpace.open(b.endpoint, space="rep") as ts:
+            assert _counted(ts) == set(range(1101))
+            assert ts.write([(AC.counter, AC.n, Literal(1101))]) and ts.snapshot()[1] == 1102
+    finally:
+        b.stop()
+        a.stop()
+
+
+def test_a_store_that_led_alone_gives_up_its_own_changes_for_the_leaders(tmp_path):
+    """As after a network split that left both stores leading: one history wins, whole."""
+    a = Server(tmp_path / "a")
+    b = Server(tmp_path / "b")
+    try:
+        for server, numbers in ((a, range(3)), (b, range(100, 105))):
+            server.start()
+            with TripleSpace.open(server.endpoint, space="rep") as ts:
+                for i in numbers:
+                    ts.write([(AC.counter, AC.n, Literal(i))])
+            server.stop()
+        a.start()
+        b.extra = ("--connect", a.endpoint)
+        b.start()
+        wait_for(lambda: "copied whole" in b.logs(), 20, "the diverged store to copy the space")
+        a.stop(signal.SIGKILL)
+        wait_for(lambda: store_answers(b.endpoint), 20, "the follower to take over")
+        with TripleSpace.open(b.endpoint, space="rep") as ts:
+            assert _counted(ts) == {0, 1, 2}
+            ts.write([(AC.counter, AC.n, Literal(3))])
+            assert ts.snapshot()[1] == 4
+    finally:
+        b.stop()
+        a.stop()

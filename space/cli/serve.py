@@ -34,6 +34,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--fsync", action="store_true", help="fsync every commit (survives power loss, slower)"
     )
     p.add_argument(
+        "--log-keep",
+        metavar="N",
+        type=int,
+        default=100_000,
+        help="changesets of each space kept for late subscribers and returning stores "
+        "(default 100000; one away longer is copied whole)",
+    )
+    p.add_argument(
         "--no-store", action="store_true", help="route only: another process keeps the space"
     )
     p.set_defaults(func=run)
@@ -50,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
         listen=args.listen,
         data_dir=args.data,
         durable=args.fsync,
+        log_keep=args.log_keep,
         config_file=args.config,
         connect=args.connect,
         store=not args.no_store,

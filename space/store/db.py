@@ -124,3 +124,35 @@ class StoreDB:
         except BaseException:
             cur.execute("ROLLBACK")
             raise
+
+    def replace(
+        self,
+        space: str,
+        rows: Iterable[tuple[str, str, str, str, str]],
+        prefixes: dict[str, str],
+        last: tuple[int, bytes],
+    ) -> None:
+        """Make a space a copy of another store's, in one transaction.
+
+        `rows` are `(g, s, p, o, ts)` as `triples()` gives them; `last` is the
+        `(seq, payload)` of the copy's last changeset, kept as the only log entry
+        so that `last_seq()` and later changes continue from it.
+        """
+        cur = self._conn.cursor()
+        cur.execute("BEGIN")
+        try:
+            for table in ("triples", "log", "prefixes"):
+                cur.execute(f"DELETE FROM {table} WHERE space=?", (space,))
+            cur.executemany(
+                "INSERT INTO triples (space, g, s, p, o, ts) VALUES (?,?,?,?,?,?)",
+                [(space, *row) for row in rows],
+            )
+            cur.executemany(
+                "INSERT INTO prefixes (space, name, ns) VALUES (?,?,?)",
+                [(space, n, ns) for n, ns in prefixes.items()],
+            )
+            cur.execute("INSERT INTO log (space, seq, payload) VALUES (?,?,?)", (space, *last))
+            cur.execute("COMMIT")
+        except BaseException:
+            cur.execute("ROLLBACK")
+            raise

@@ -4,6 +4,12 @@ The leader's net changesets (what it publishes on `@/changes` and keeps in its
 log) are installed exactly, in sequence order; a gap is filled from the
 leader's log; each install is confirmed on `@repl/ack` so the leader can
 acknowledge writes that every replica holds.
+
+A log only continues a state it shares: the leader's changeset at this store's
+last sequence number must be this store's own. When it is not (this store led
+on its own during a network split) or the leader no longer keeps it (this store
+was away longer than the leader's log reaches), the space is copied whole from
+the leader (`@repl/state`) instead.
 """
 
 from __future__ import annotations
@@ -32,11 +38,13 @@ class Replica:
         root: str,
         db: StoreDB,
         space: Callable[[str], SpaceState],
+        adopt: Callable[[SpaceState], None],
     ) -> None:
         self.session = session
         self.root = root
         self.db = db
         self.space = space
+        self.adopt = adopt
 
     def catch_up(self) -> None:
         """Fetch from the leader what this store missed, space by space (blocks)."""
@@ -74,16 +82,57 @@ class Replica:
         )
 
     def _fetch(self, state: SpaceState, last: int) -> None:
-        if last <= state.seq:
+        """Install the leader's changesets after `state.seq` up to `last`, or copy the space."""
+        if last < state.seq:
+            self._copy(state.name)  # this store holds changes the leader never made
+            return
+        if not state.seq and not last:
             return
         key = keys.service_key(state.name, "log", self.root)
-        request = pack({"from": state.seq + 1, "to": last})
+        # From this store's own last changeset on: the leader's must be the same one.
+        request = pack({"from": max(state.seq, 1), "to": last})
         try:
             changes = ask_store(self.session, key, request, 10.0, what="log request")["changes"]
         except SpaceError as exc:
             log.warning("could not catch up %s: %s", state.name, exc)
             return
-        self._install(state, [bytes(p) for p in changes])
+        payloads = [bytes(p) for p in changes]
+        if state.seq:
+            theirs = Changeset.decode(payloads.pop(0)) if payloads else None
+            if theirs is None or theirs.seq != state.seq or theirs.id != self._own_last(state):
+                self._copy(state.name)
+                return
+        if payloads and Changeset.decode(payloads[0]).seq != state.seq + 1:
+            self._copy(state.name)  # the leader's log no longer reaches back to this store
+            return
+        self._install(state, payloads)
+
+    def _own_last(self, state: SpaceState) -> str | None:
+        rows = self.db.log(state.name, state.seq, state.seq)
+        return Changeset.decode(rows[0][1]).id if rows else None
+
+    def _copy(self, name: str) -> None:
+        """Replace this store's copy of a space with the leader's whole state."""
+        key = f"{self.root}/@repl/state"
+        try:
+            reply = ask_store(self.session, key, pack({"space": name}), 30.0, what="state copy")
+        except SpaceError as exc:
+            log.warning("could not copy %s from the leader: %s", name, exc)
+            return
+        seq, last = int(reply["seq"]), bytes(reply["last"])
+        if not seq:
+            return  # the leader holds nothing of it
+        rows = [tuple(str(x) for x in row) for row in reply["rows"]]
+        prefixes = {str(k): str(v) for k, v in reply["prefixes"].items()}
+        self.db.replace(name, rows, prefixes, (seq, last))  # type: ignore[arg-type]
+        state = SpaceState(name)
+        state.prefixes.update(prefixes)
+        state.load(rows)  # type: ignore[arg-type]
+        state.seq = seq
+        self.adopt(state)
+        log.warning(
+            "space %s copied whole from the leader (%d triples, seq %d)", name, len(rows), seq
+        )
 
     def _install(self, state: SpaceState, payloads: list[bytes]) -> None:
         commits = []

@@ -41,7 +41,7 @@ _SERVICES = ("write", "query", "log", "keys")
 
 @dataclass
 class _Request:
-    kind: str  # a service, or "replica", "ack", "peer", "spaces"
+    kind: str  # a service, or "replica", "ack", "peer", "spaces", "state"
     space: str
     payload: bytes | None
     query: zenoh.Query | None = None
@@ -61,11 +61,13 @@ class StoreServer:
         data_dir: Path,
         *,
         durable: bool = False,
+        log_keep: int = 100_000,
         root: str = keys.ROOT,
         look_for_leader: float = 0.0,
     ) -> None:
         self.session = session
         self.look_for_leader = look_for_leader
+        self.log_keep = log_keep
         self.data_dir = data_dir
         self.durable = durable
         self.root = root
@@ -89,8 +91,8 @@ class StoreServer:
 
         Blocks until this store leads or has caught up with the leader.
         """
-        self._db = StoreDB(self.data_dir, durable=self.durable)
-        self._replica = Replica(self.session, self.root, self._db, self._space)
+        self._db = StoreDB(self.data_dir, durable=self.durable, log_keep=self.log_keep)
+        self._replica = Replica(self.session, self.root, self._db, self._space, self._adopt)
         for name in self._db.spaces():
             self._space(name)
         self.zid = str(self.session.zid())
@@ -267,6 +269,8 @@ class StoreServer:
         elif req.kind == "spaces":
             reply = pack({name: state.seq for name, state in self._spaces.items()})
             self._answer(req, lambda: reply)
+        elif req.kind == "state":
+            self._answer(req, lambda: self._copy(unpack(req.payload or b"")))
         elif req.kind in _SERVICES:
             self._answer(req, lambda: self._service(req))
 
@@ -305,6 +309,26 @@ class StoreServer:
         assert self._db is not None
         rows = self._db.log(state.name, first, last)
         return pack({"seq": state.seq, "changes": [payload for _seq, payload in rows]})
+
+    def _copy(self, request: object) -> bytes:
+        """Return a space whole, for a follower whose own copy cannot be continued."""
+        if not isinstance(request, dict) or not isinstance(request.get("space"), str):
+            raise MalformedPayload("a state request is a map {space}")
+        state = self._space(request["space"])
+        assert self._db is not None
+        last = self._db.log(state.name, state.seq, state.seq)
+        return pack(
+            {
+                "seq": state.seq,
+                "last": last[0][1] if last else b"",
+                "prefixes": self._db.prefixes(state.name),
+                "rows": list(self._db.triples(state.name)),
+            }
+        )
+
+    def _adopt(self, state: SpaceState) -> None:
+        """Serve `state` for its space from now on (a follower's fresh copy)."""
+        self._spaces[state.name] = state
 
     def _reject(self, req: _Request, exc: Exception) -> None:
         what = "rejected" if isinstance(exc, QueryError) else "malformed, skipped:"
@@ -361,6 +385,7 @@ class StoreServer:
                 s.declare_queryable(f"{root}/*/{keys.ASSERTED}/**", on_query("keys")),
                 s.declare_queryable(f"{root}/*/{keys.INFERRED}/**", on_query("keys")),
                 s.declare_queryable(f"{root}/@repl/spaces", on_query("spaces")),
+                s.declare_queryable(f"{root}/@repl/state", on_query("state")),
                 s.declare_subscriber(f"{root}/@repl/ack", self._on_sample("ack")),
                 s.liveliness().declare_token(f"{root}/@leader/{self.zid}"),
             ]
