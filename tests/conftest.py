@@ -13,6 +13,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+from agentprocs import Launcher
 
 from space import TripleSpace
 from space.errors import SpaceError
@@ -147,3 +148,13 @@ def run_tspace(server: Server, space_name: str) -> Callable[..., subprocess.Comp
         return subprocess.run(cmd, input=stdin, capture_output=True, text=True, timeout=timeout)
 
     return run
+
+
+@pytest.fixture
+def launch(server: Server, space_name: str, tmp_path: Path) -> Iterator[Launcher]:
+    """Start agent processes on the module's router; every one is stopped at the end."""
+    launcher = Launcher(server.endpoint, space_name, tmp_path)
+    try:
+        yield launcher
+    finally:
+        launcher.close()

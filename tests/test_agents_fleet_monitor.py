@@ -1,7 +1,6 @@
 """The fleet monitor as a process: a robot is present while one of its agents is alive."""
 
-import pytest
-from agentprocs import Launcher, knowledge
+from agentprocs import knowledge
 from rdflib import RDF, Literal, Namespace
 
 from conftest import AC_NS, wait_for
@@ -10,15 +9,6 @@ from space.presence import declare_agent
 
 AC = Namespace(AC_NS)
 PRESENCE = (None, AC.presence, None)
-
-
-@pytest.fixture
-def launch(server, space_name, tmp_path):
-    launcher = Launcher(server.endpoint, space_name, tmp_path)
-    try:
-        yield launcher
-    finally:
-        launcher.close()
 
 
 def presence(ts, robot):

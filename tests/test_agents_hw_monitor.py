@@ -3,21 +3,12 @@
 import signal
 
 import pytest
-from agentprocs import Launcher, alive, knowledge, value
+from agentprocs import alive, knowledge, value
 from rdflib import Literal, Namespace
 
 from conftest import AC_NS, wait_for
 
 AC = Namespace(AC_NS)
-
-
-@pytest.fixture
-def launch(server, space_name, tmp_path):
-    launcher = Launcher(server.endpoint, space_name, tmp_path)
-    try:
-        yield launcher
-    finally:
-        launcher.close()
 
 
 @pytest.fixture

@@ -13,15 +13,6 @@ AC = Namespace(AC_NS)
 
 
 @pytest.fixture
-def launch(server, space_name, tmp_path):
-    launcher = Launcher(server.endpoint, space_name, tmp_path)
-    try:
-        yield launcher
-    finally:
-        launcher.close()
-
-
-@pytest.fixture
 def robot(ts):
     ts.write(knowledge())
     return ts

@@ -4,22 +4,12 @@ import shutil
 import signal
 import threading
 
-import pytest
-from agentprocs import HOSPITAL, REPO, Launcher, value
+from agentprocs import HOSPITAL, REPO, value
 from rdflib import RDF, Literal, Namespace
 
 from conftest import AC_NS, wait_for
 
 AC = Namespace(AC_NS)
-
-
-@pytest.fixture
-def launch(server, space_name, tmp_path):
-    launcher = Launcher(server.endpoint, space_name, tmp_path)
-    try:
-        yield launcher
-    finally:
-        launcher.close()
 
 
 def firings(ts, rule=None):

@@ -13,7 +13,7 @@ import threading
 from dataclasses import dataclass
 
 import pytest
-from agentprocs import REPO, Launcher, value
+from agentprocs import REPO, value
 from rdflib import Graph, Literal, Namespace
 from rdflib.term import Node
 
@@ -75,15 +75,6 @@ class Recorder:
                 continue
             wrong += [f"{t} <- {cause.agent}" for t in record.added if t[0] in devices]
         return wrong
-
-
-@pytest.fixture
-def launch(server, space_name, tmp_path):
-    launcher = Launcher(server.endpoint, space_name, tmp_path)
-    try:
-        yield launcher
-    finally:
-        launcher.close()
 
 
 @pytest.fixture(params=["one reasoner", "a reasoner per robot"])

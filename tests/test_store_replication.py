@@ -14,12 +14,18 @@ def _counted(ts: TripleSpace) -> set[int]:
     return {int(o) for o in ts.query((AC.counter, AC.n, None)).objects()}
 
 
-def test_killing_the_leader_loses_no_acknowledged_change(tmp_path):
-    a = Server(tmp_path / "a")
+def leader_and_follower(tmp_path, *leader_args: str) -> tuple[Server, Server]:
+    """Start a leading store, and a second one that follows it."""
+    a = Server(tmp_path / "a", *leader_args)
     a.start()
     b = Server(tmp_path / "b", "--connect", a.endpoint)
     b.start()
     wait_for(lambda: "follows" in b.logs(), 10, "the second store to follow the first")
+    return a, b
+
+
+def test_killing_the_leader_loses_no_acknowledged_change(tmp_path):
+    a, b = leader_and_follower(tmp_path)
     try:
         with TripleSpace.open(b.endpoint, space="rep") as ts:
             for i in range(50):
@@ -48,11 +54,7 @@ def test_killing_the_leader_loses_no_acknowledged_change(tmp_path):
 
 
 def test_subscriber_keeps_its_order_across_a_failover(tmp_path):
-    a = Server(tmp_path / "a")
-    a.start()
-    b = Server(tmp_path / "b", "--connect", a.endpoint)
-    b.start()
-    wait_for(lambda: "follows" in b.logs(), 10, "the second store to follow the first")
+    a, b = leader_and_follower(tmp_path)
     try:
         seen = []
         with TripleSpace.open(b.endpoint, space="rep") as ts:
@@ -70,11 +72,7 @@ def test_subscriber_keeps_its_order_across_a_failover(tmp_path):
 
 
 def test_a_store_away_longer_than_the_log_copies_the_space_whole(tmp_path):
-    a = Server(tmp_path / "a", "--log-keep", "10")
-    a.start()
-    b = Server(tmp_path / "b", "--connect", a.endpoint)
-    b.start()
-    wait_for(lambda: "follows" in b.logs(), 10, "the second store to follow the first")
+    a, b = leader_and_follower(tmp_path, "--log-keep", "10")
     try:
         with TripleSpace.open(a.endpoint, space="rep") as ts:
             ts.write([(AC.counter, AC.n, Literal(0))])
