@@ -66,6 +66,8 @@ class Agent:
     Attributes:
         kind: the agent's kind, the first part of its default name.
         per_robot: False for agents serving the whole space (named just `kind`).
+        keeps_view: False for agents that never read `view` (it is then left empty:
+            applying a 600-triple change to it costs milliseconds).
         args: the parsed command line.
         robot: the robot this agent serves.
         name: the agent's name in logs, liveliness and changesets.
@@ -75,6 +77,7 @@ class Agent:
 
     kind: ClassVar[str] = "agent"
     per_robot: ClassVar[bool] = True
+    keeps_view: ClassVar[bool] = True
 
     def __init__(self, args: argparse.Namespace) -> None:
         self.args = args
@@ -181,7 +184,8 @@ class Agent:
     # Handling
 
     def _handle(self, change: Change) -> None:
-        self.view.apply(change)
+        if self.keeps_view:
+            self.view.apply(change)
         if not self.started:
             self.started = True
             self.log.info("view rebuilt from the space: %d triples", len(self.view.graph))

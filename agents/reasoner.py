@@ -29,7 +29,7 @@ from rdflib.term import Node
 
 from agents.base import Agent, local_name, run_agent
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
-from agents.ownership import PREFIX, Roster, concerned_robot, firing_robot
+from agents.ownership import PREFIX, Roster, concerned_robot
 from agents.view import AC
 from space import Change, Subscription
 from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
@@ -45,6 +45,7 @@ class Reasoner(Agent):
 
     kind = "reasoner"
     per_robot = False
+    keeps_view = False  # it decides from its engine, never from a view
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)
@@ -219,11 +220,15 @@ class Reasoner(Agent):
                 list(inferred_before - now),
             )
         added, removed = list(delta.asserted_added), list(delta.asserted_removed)
+        robots: dict[Node, bool] = {}
         for firing in delta.firings:
-            self.log.info("fired %s (cause %s)", firing.rule, cause)
-            new, old = self.firings.record(firing.rule, cause, self._robot_of(firing))
+            new, old = self.firings.record(firing.rule, cause, self._robot_of(firing, robots))
             added += new
             removed += old
+        if delta.firings:
+            # One line per answer: 200 firings logged one by one took milliseconds.
+            rules = dict.fromkeys(firing.rule for firing in delta.firings)
+            self.log.info("fired %d rule(s) (cause %s): %s", len(rules), cause, ", ".join(rules))
         if not (added or removed or inferred_added or inferred_removed):
             return
         self.ts.apply(
@@ -235,10 +240,20 @@ class Reasoner(Agent):
             timeout=self.args.timeout,
         )
 
-    def _robot_of(self, firing: Firing) -> Node:
-        """Return the robot a firing concerned: a robot among its premises, else `--robot`."""
+    def _robot_of(self, firing: Firing, robots: dict[Node, bool]) -> Node:
+        """Return the robot a firing concerned: the first robot among its premises, else `--robot`.
+
+        `robots` remembers which subjects are robots for one answer: its
+        firings share their premises' subjects, so the engine is asked once each.
+        """
         assert self.engine is not None
-        return firing_robot(self.engine, firing) or self.robot
+        for s, _p, _o in firing.triggers:
+            is_robot = robots.get(s)
+            if is_robot is None:
+                is_robot = robots[s] = (s, RDF.type, AC.Robot) in self.engine
+            if is_robot:
+                return s
+        return self.robot
 
     # Rules reload
 

@@ -13,10 +13,10 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from rdflib import OWL, RDF, Graph, Literal, Namespace, URIRef
-from rdflib.plugins.stores.memory import SimpleMemory
 from rdflib.term import Node
 
 from space.changeset import Changeset
+from space.memory import BulkMemory
 from space.terms import Triple
 
 AC = Namespace("https://w3id.org/tspace/selfconfig#")
@@ -26,13 +26,14 @@ RECORD_PREFIX = str(AC) + "firing_"
 class View:
     """The triples an agent knows, with the lookups agents need.
 
-    The graph has no named graphs (a `SimpleMemory` store, cheaper to update
-    than rdflib's default), and the functional properties are kept in a set so
-    that each triple added costs one lookup, not a graph query.
+    The graph has no named graphs and changes go to its store's indexes
+    directly (`space.memory.BulkMemory`), and the functional properties are
+    kept in a set so that each triple added costs one lookup, not a graph query.
     """
 
     def __init__(self, triples: Iterable[Triple] = ()) -> None:
-        self.graph = Graph(store=SimpleMemory())
+        self._store = BulkMemory()
+        self.graph = Graph(store=self._store)
         self._functional: set[Node] = set()
         self.add(triples)
 
@@ -48,23 +49,26 @@ class View:
         before the removal it implies, so the view enforces it too. Firing
         records are left out.
         """
-        graph, functional = self.graph, self._functional
-        for s, p, o in triples:
+        store, functional = self._store, self._functional
+        for t in triples:
+            s, p, o = t
             if s.startswith(RECORD_PREFIX):
                 continue
             if p in functional:
-                graph.remove((s, p, None))
+                for old in store.objects_of(s, p):
+                    if old != o:
+                        store.discard((s, p, old))
             elif p == RDF.type and o == OWL.FunctionalProperty:
                 functional.add(s)
-            graph.add((s, p, o))
+            store.put(t)
 
     def remove(self, triples: Iterable[Triple]) -> None:
         """Remove triples (absent ones are ignored)."""
-        graph = self.graph
+        store = self._store
         for triple in triples:
             if triple[1] == RDF.type and triple[2] == OWL.FunctionalProperty:
                 self._functional.discard(triple[0])
-            graph.remove(triple)
+            store.discard(triple)
 
     def is_functional(self, predicate: Node) -> bool:
         """Return True if the view declares `predicate` an owl:FunctionalProperty."""

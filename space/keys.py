@@ -54,8 +54,25 @@ def unescape(chunk: str) -> str:
     return _ESCAPED_RE.sub(lambda m: chr(int(m.group(1), 16)), chunk)
 
 
+_MEMO_MAX = 65536
+
+
 def term_chunk(term: Node, prefixes: PrefixMap) -> str:
-    """Return the key chunk of a term."""
+    """Return the key chunk of a term.
+
+    Memoized in the prefix map (emptied when its bindings change): the store
+    makes a key for every triple it publishes, and the same terms recur.
+    """
+    memo = prefixes.chunks
+    chunk = memo.get(term)
+    if chunk is None:
+        if len(memo) >= _MEMO_MAX:
+            memo.clear()
+        chunk = memo[term] = _term_chunk(term, prefixes)
+    return chunk
+
+
+def _term_chunk(term: Node, prefixes: PrefixMap) -> str:
     if isinstance(term, URIRef):
         text = prefixes.compact(str(term)) or f"<{term}>"
     elif isinstance(term, Literal) and term.datatype is not None and not term.language:
@@ -92,8 +109,10 @@ def triple_key(
     space: str, graph: str, triple: Triple, prefixes: PrefixMap, root: str = ROOT
 ) -> str:
     """Return the key of one triple in the asserted (`t`) or inferred (`i`) graph."""
-    s, p, o = (term_chunk(term, prefixes) for term in triple)
-    return f"{root}/{space}/{graph}/{s}/{p}/{o}"
+    return (
+        f"{root}/{space}/{graph}/{term_chunk(triple[0], prefixes)}"
+        f"/{term_chunk(triple[1], prefixes)}/{term_chunk(triple[2], prefixes)}"
+    )
 
 
 def parse_triple_key(key: str, prefixes: PrefixMap) -> tuple[str, str, Triple]:

@@ -28,13 +28,13 @@ class PrefixMap:
         self._by_name: dict[str, str] = dict(WELL_KNOWN)
         # Longest namespace first, so nested namespaces compact to the most specific one.
         self._by_ns: list[tuple[str, str]] = []
-        self._compacted: dict[str, str | None] = {}
+        self.chunks: dict[object, str] = {}
         self._rebuild()
         if bindings:
             self.update(bindings)
 
     def _rebuild(self) -> None:
-        self._compacted = {}
+        self.chunks = {}  # callers' memo of texts made with these bindings (`keys.term_chunk`)
         self._by_ns = sorted(((ns, n) for n, ns in self._by_name.items()), key=lambda x: -len(x[0]))
 
     def update(self, bindings: Mapping[str, str]) -> dict[str, str]:

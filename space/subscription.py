@@ -64,6 +64,21 @@ class Subscription:
     def filter(self, cs: Changeset) -> Change | None:
         """Return the matching part of a changeset, or None if nothing matches."""
         t = self.template
+        if t.s is None and t.p is None and t.o is None:  # everything matches, nothing binds
+            if cs.is_empty():
+                return None
+            return Change(
+                id=cs.id,
+                agent=cs.agent,
+                timestamp=cs.timestamp,
+                cause=cs.cause,
+                seq=cs.seq,
+                prefixes=cs.prefixes,
+                added=cs.added,
+                removed=cs.removed,
+                inferred_added=cs.inferred_added,
+                inferred_removed=cs.inferred_removed,
+            )
         lists = [
             [x for x in triples if t.match(x) is not None]
             for triples in (cs.added, cs.removed, cs.inferred_added, cs.inferred_removed)

@@ -91,9 +91,18 @@ def triple_from_nt(parts: object) -> Triple:
     """
     if not isinstance(parts, list | tuple) or len(parts) != 3:
         raise MalformedPayload(f"a triple is a list of three terms, got {parts!r}")
-    s, p, o = (from_nt(part) for part in parts)
+    try:
+        return _triple(*parts)
+    except TypeError:  # an unhashable part: not a term's text
+        raise MalformedPayload(f"not an N-Triples term in {parts!r}") from None
+
+
+@lru_cache(maxsize=65536)
+def _triple(s_text: str, p_text: str, o_text: str) -> Triple:
+    """Parse and check one triple's texts (cached whole: changes repeat the same triples)."""
+    s, p, o = from_nt(s_text), from_nt(p_text), from_nt(o_text)
     if isinstance(s, Literal) or not isinstance(p, URIRef):
-        raise MalformedPayload(f"not a valid RDF triple: {parts!r}")
+        raise MalformedPayload(f"not a valid RDF triple: {[s_text, p_text, o_text]!r}")
     return s, p, o
 
 

@@ -81,6 +81,7 @@ class StoreServer:
         self._token: zenoh.LivelinessToken | None = None
         self._stores: set[str] = set()
         self._acks = AckGate()
+        self._graph_publishers: dict[tuple[str, str], zenoh.Publisher] = {}
         self._db: StoreDB | None = None
         self._replica: Replica
         self._worker: threading.Thread | None = None
@@ -127,6 +128,9 @@ class StoreServer:
             self._queue.put(None)
             self._worker.join()
             self._worker = None
+        for publisher in self._graph_publishers.values():
+            publisher.undeclare()
+        self._graph_publishers = {}
         if self._db is not None:
             self._db.close()
             self._db = None
@@ -232,26 +236,44 @@ class StoreServer:
                 if not self._acks.hold(state.name, seq, req.query, req.key, ack):
                     req.query.reply(req.key, ack)
                     req.query.drop()
-        payloads = iter(c.payload for c in commits)
-        for _req, net, state in pending:
-            if net is not None:
-                self._publish(state, net, next(payloads))
+        published = [(net, state) for _req, net, state in pending if net is not None]
+        block = zenoh.CongestionControl.BLOCK
+        # The whole changesets first (every agent waits for them), then their triples' keys.
+        for (_net, state), commit in zip(published, commits, strict=True):
+            key = keys.service_key(state.name, "changes", self.root)
+            self.session.put(key, commit.payload, congestion_control=block)
+        for net, state in published:
+            self._publish_triples(state, net)
 
-    def _publish(self, state: SpaceState, net: Changeset, payload: bytes) -> None:
+    def _publish_triples(self, state: SpaceState, net: Changeset) -> None:
+        """Publish each triple of a net changeset on its key, for plain Zenoh subscribers.
+
+        A graph nobody subscribes to is skipped without making its keys (Zenoh
+        would drop the samples anyway): a 600-triple answer then costs nothing here.
+        """
         s = self.session
         block = zenoh.CongestionControl.BLOCK
-        s.put(keys.service_key(state.name, "changes", self.root), payload, congestion_control=block)
         meta = pack({"id": net.id, "seq": net.seq})
         for graph, removed, added in (
             (keys.ASSERTED, net.removed, net.added),
             (keys.INFERRED, net.inferred_removed, net.inferred_added),
         ):
+            if not (removed or added) or not self._watched(state.name, graph):
+                continue
             for t in removed:
                 key = keys.triple_key(state.name, graph, t, state.prefixes, self.root)
                 s.delete(key, attachment=meta, congestion_control=block)
             for t in added:
                 key = keys.triple_key(state.name, graph, t, state.prefixes, self.root)
                 s.put(key, meta, congestion_control=block)
+
+    def _watched(self, space: str, graph: str) -> bool:
+        """Return whether any subscriber matches a graph's triple keys (Zenoh's matching status)."""
+        publisher = self._graph_publishers.get((space, graph))
+        if publisher is None:
+            key = f"{self.root}/{space}/{graph}/**"
+            publisher = self._graph_publishers[(space, graph)] = self.session.declare_publisher(key)
+        return publisher.matching_status.matching
 
     def _heartbeat(self) -> None:
         """Publish each space's sequence number, so subscribers learn of changes they missed."""

@@ -17,6 +17,7 @@ from rdflib.term import Node
 
 from space.changeset import Changeset, hlc_key
 from space.keys import ASSERTED, INFERRED
+from space.memory import BulkMemory
 from space.prefixes import PrefixMap
 from space.store.db import Commit
 from space.template import Template
@@ -30,8 +31,9 @@ class SpaceState:
         self.name = name
         self.seq = 0
         self.prefixes = PrefixMap()
-        # Two plain graphs (cheaper to update than a Dataset); SPARQL reads their union.
-        self.graphs: dict[str, Graph] = {ASSERTED: Graph(), INFERRED: Graph()}
+        # Two plain graphs (no named graphs; updated in bulk); SPARQL reads their union.
+        self.stores = {ASSERTED: BulkMemory(), INFERRED: BulkMemory()}
+        self.graphs: dict[str, Graph] = {g: Graph(store=m) for g, m in self.stores.items()}
         self.union = ReadOnlyGraphAggregate(list(self.graphs.values()))
         self._stamps: dict[tuple[Node, Node], str] = {}
         self._functional: set[Node] = set()
@@ -40,7 +42,7 @@ class SpaceState:
         """Fill the state from database rows `(g, s, p, o, ts)`."""
         for g, s, p, o, ts in rows:
             triple = (from_nt(s), from_nt(p), from_nt(o))
-            self.graphs[g].add(triple)
+            self.stores[g].update(added=[triple])
             if ts:
                 self._stamps[(triple[0], triple[1])] = ts
         self._functional = self._functional_properties()
@@ -55,7 +57,7 @@ class SpaceState:
 
         Returns None when nothing changes: the changeset is then not logged.
         """
-        asserted, inferred = self.graphs[ASSERTED], self.graphs[INFERRED]
+        asserted, inferred = self.stores[ASSERTED], self.stores[INFERRED]
         stamp = cs.timestamp
         added = self._functional_additions(cs.added, stamp)
         removed, added = _net(asserted, cs.removed + added.replaced, added.kept)
@@ -82,16 +84,9 @@ class SpaceState:
 
         `apply` ends here; a follower store installs the leader's net changesets directly.
         """
-        asserted, inferred = self.graphs[ASSERTED], self.graphs[INFERRED]
         self.prefixes.update(net.prefixes)
-        for graph, rem, add in (
-            (asserted, net.removed, net.added),
-            (inferred, net.inferred_removed, net.inferred_added),
-        ):
-            for t in rem:
-                graph.remove(t)
-            for t in add:
-                graph.add(t)
+        self.stores[ASSERTED].update(net.removed, net.added)
+        self.stores[INFERRED].update(net.inferred_removed, net.inferred_added)
         every = (*net.removed, *net.added, *net.inferred_removed, *net.inferred_added)
         if any(t[1] == RDF.type and t[2] == OWL.FunctionalProperty for t in every):
             self._functional = self._functional_properties()
@@ -125,13 +120,13 @@ class SpaceState:
                 latest[(t[0], t[1])] = t  # within one changeset the last value wins
             else:
                 result.kept.append(t)
-        asserted = self.graphs[ASSERTED]
+        asserted = self.stores[ASSERTED]
         for (s, p), t in latest.items():
             held = self._stamps.get((s, p))
             if held and stamp and hlc_key(stamp) < hlc_key(held):
                 continue  # an older write of a functional property loses, everywhere
             result.kept.append(t)
-            result.replaced.extend((s, p, o) for o in asserted.objects(s, p) if o != t[2])
+            result.replaced.extend((s, p, o) for o in asserted.objects_of(s, p) if o != t[2])
         return result
 
     def match(self, template: Template, graph: str = "all") -> list[Triple]:
@@ -158,11 +153,12 @@ class _Additions:
 
 
 def _net(
-    graph: Graph, removed: list[Triple], added: list[Triple]
+    graph: BulkMemory, removed: list[Triple], added: list[Triple]
 ) -> tuple[list[Triple], list[Triple]]:
     """Return what removing then adding really changes in a graph."""
-    gone = {t: None for t in removed if t in graph}
-    new = {t: None for t in added if t not in graph or t in gone}
+    has = graph.has
+    gone = {t: None for t in removed if has(t)}
+    new = {t: None for t in added if not has(t) or t in gone}
     return [t for t in gone if t not in new], [t for t in new if t not in gone]
 
 

@@ -1,0 +1,42 @@
+"""BulkMemory against rdflib's own graph operations."""
+
+from __future__ import annotations
+
+from rdflib import Graph, Literal, URIRef
+from rdflib.plugins.stores.memory import SimpleMemory
+
+from space.memory import BulkMemory
+
+EX = "http://example.org/"
+
+
+def _t(s: str, p: str, o: object) -> tuple:
+    return (URIRef(EX + s), URIRef(EX + p), o if isinstance(o, URIRef) else Literal(o))
+
+
+def test_bulk_updates_read_like_rdflib() -> None:
+    bulk, plain = Graph(store=BulkMemory()), Graph(store=SimpleMemory())
+    added = [_t("a", "p", 1), _t("a", "p", 2), _t("b", "q", URIRef(EX + "a")), _t("a", "p", 1)]
+    removed = [_t("a", "p", 2), _t("c", "p", 3)]  # one present, one absent
+    bulk.store.update((), added)
+    bulk.store.update(removed, [_t("c", "r", "x")])
+    for t in added:
+        plain.add(t)
+    for t in removed:
+        plain.remove(t)
+    plain.add(_t("c", "r", "x"))
+    assert set(bulk) == set(plain) and len(bulk) == len(plain) == 3
+    for pattern in [(None, None, None), (URIRef(EX + "a"), None, None), (None, None, Literal(1))]:
+        assert set(bulk.triples(pattern)) == set(plain.triples(pattern))
+    assert bulk.store.has(_t("a", "p", 1)) and not bulk.store.has(_t("a", "p", 2))
+    assert bulk.store.objects_of(URIRef(EX + "a"), URIRef(EX + "p")) == [Literal(1)]
+    assert set(bulk.query("SELECT ?s WHERE { ?s ?p 1 }")) == {(URIRef(EX + "a"),)}
+
+
+def test_graph_remove_by_triple_and_by_pattern() -> None:
+    graph = Graph(store=BulkMemory())
+    for t in [_t("a", "p", 1), _t("a", "p", 2), _t("b", "p", 1)]:
+        graph.add(t)
+    graph.remove(_t("a", "p", 1))
+    graph.remove((URIRef(EX + "a"), None, None))
+    assert set(graph) == {_t("b", "p", 1)}
