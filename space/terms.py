@@ -3,6 +3,9 @@
 N-Triples is the one term syntax every RDF tool reads, so a program that knows
 nothing of tspace can still produce and read our payloads. Parsing is cached:
 the same few thousand terms (devices, levels, predicates) recur in every change.
+The caches are small on purpose: one-off terms (a firing record's time, seq and
+cause) pass through them at every answer, and 65,536 entries each grew every
+process by tens of MB before levelling off.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ _LITERAL_RE = re.compile(
     r'^"((?:[^"\\]|\\.)*)"(?:\^\^<([^>]*)>|@([A-Za-z]+(?:-[A-Za-z0-9]+)*))?$', re.S
 )
 _XSD_STRING = "http://www.w3.org/2001/XMLSchema#string"
+CACHED = 4096  # terms (or triples) each cache holds: a fleet's recurring ones, not its history
 
 
 def _unescape(text: str) -> str:
@@ -38,7 +42,7 @@ def _unescape(text: str) -> str:
     return _UNESCAPE_RE.sub(one, text)
 
 
-@lru_cache(maxsize=65536)
+@lru_cache(maxsize=CACHED)
 def to_nt(term: Node) -> str:
     """Return the N-Triples text of an rdflib term."""
     if isinstance(term, URIRef):
@@ -55,7 +59,7 @@ def to_nt(term: Node) -> str:
     raise TypeError(f"not an RDF term: {term!r}")
 
 
-@lru_cache(maxsize=65536)
+@lru_cache(maxsize=CACHED)
 def from_nt(text: str) -> Node:
     """Parse the N-Triples text of one term.
 
@@ -97,7 +101,7 @@ def triple_from_nt(parts: object) -> Triple:
         raise MalformedPayload(f"not an N-Triples term in {parts!r}") from None
 
 
-@lru_cache(maxsize=65536)
+@lru_cache(maxsize=CACHED)
 def _triple(s_text: str, p_text: str, o_text: str) -> Triple:
     """Parse and check one triple's texts (cached whole: changes repeat the same triples)."""
     s, p, o = from_nt(s_text), from_nt(p_text), from_nt(o_text)
