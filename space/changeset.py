@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import uuid
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 
@@ -44,8 +45,12 @@ class Changeset:
         """Return the wall-clock part of the HLC timestamp, if any."""
         return hlc_datetime(self.timestamp) if self.timestamp else None
 
-    def to_wire(self) -> dict:
-        """Return the msgpack-ready map described in docs/wire-format.md."""
+    def to_wire(self, texts: Sequence[Sequence[Sequence[str]]] | None = None) -> dict:
+        """Return the msgpack-ready map described in docs/wire-format.md.
+
+        `texts`: the N-Triples texts of added, removed, inferred_added and
+        inferred_removed, when the caller has them already.
+        """
         wire: dict = {"v": WIRE_VERSION, "id": self.id, "agent": self.agent, "ts": self.timestamp}
         if self.cause:
             wire["cause"] = self.cause
@@ -53,17 +58,19 @@ class Changeset:
             wire["seq"] = self.seq
         if self.prefixes:
             wire["prefixes"] = self.prefixes
-        for name, triples in zip(_LISTS, self._lists(), strict=True):
-            if triples:
-                wire[name] = [triple_to_nt(t) for t in triples]
+        if texts is None:
+            texts = [[triple_to_nt(t) for t in triples] for triples in self._lists()]
+        for name, listed in zip(_LISTS, texts, strict=True):
+            if listed:
+                wire[name] = listed
         return wire
 
     def _lists(self) -> tuple[list[Triple], ...]:
         return (self.added, self.removed, self.inferred_added, self.inferred_removed)
 
-    def encode(self) -> bytes:
-        """Return the msgpack payload."""
-        return msgpack.packb(self.to_wire(), use_bin_type=True)
+    def encode(self, texts: Sequence[Sequence[Sequence[str]]] | None = None) -> bytes:
+        """Return the msgpack payload (`texts` as in `to_wire`)."""
+        return msgpack.packb(self.to_wire(texts), use_bin_type=True)
 
     @classmethod
     def from_wire(cls, wire: object) -> Changeset:

@@ -389,8 +389,21 @@ def _used_prefixes(cs: Changeset, sources: list[Triples], own: PrefixMap) -> dic
     for t in (*cs.added, *cs.removed, *cs.inferred_added, *cs.inferred_removed):
         for term in t:
             if isinstance(term, URIRef):
-                text = str(term)
-                ns = text[: max(text.rfind("#"), text.rfind("/")) + 1]
+                ns = _namespace(term)
                 if ns in by_ns:
                     used[by_ns[ns]] = ns
     return used
+
+
+_NAMESPACES: dict[URIRef, str] = {}
+
+
+def _namespace(iri: URIRef) -> str:
+    """Return an IRI up to its last `#` or `/` (memoized: a big changeset repeats its IRIs)."""
+    ns = _NAMESPACES.get(iri)
+    if ns is None:
+        if len(_NAMESPACES) >= 65536:
+            _NAMESPACES.clear()
+        text = str(iri)
+        ns = _NAMESPACES[iri] = text[: max(text.rfind("#"), text.rfind("/")) + 1]
+    return ns

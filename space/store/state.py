@@ -88,27 +88,29 @@ class SpaceState:
         self.stores[ASSERTED].update(net.removed, net.added)
         self.stores[INFERRED].update(net.inferred_removed, net.inferred_added)
         every = (*net.removed, *net.added, *net.inferred_removed, *net.inferred_added)
-        if any(t[1] == RDF.type and t[2] == OWL.FunctionalProperty for t in every):
+        if any(t[2] in _FUNCTIONAL_CLASS and t[1] == RDF.type for t in every):
             self._functional = self._functional_properties()
         for t in net.removed:
             self._stamps.pop((t[0], t[1]), None)
+        # Each triple's texts once, for the database rows and the payload alike.
+        added, removed, i_added, i_removed = (
+            [_row(t) for t in triples]
+            for triples in (net.added, net.removed, net.inferred_added, net.inferred_removed)
+        )
         stamped = []
-        for t in net.added:
+        for t, row in zip(net.added, added, strict=True):
             stamp = net.timestamp if t[1] in self._functional else ""
             if stamp:
                 self._stamps[(t[0], t[1])] = stamp
-            stamped.append((ASSERTED, _row(t), stamp))
+            stamped.append((ASSERTED, row, stamp))
         self.seq = net.seq
-        commit = Commit(
-            space=self.name,
-            seq=net.seq,
-            payload=payload if payload is not None else net.encode(),
-            prefixes=net.prefixes,
-        )
-        commit.removed = [(ASSERTED, _row(t)) for t in net.removed] + [
-            (INFERRED, _row(t)) for t in net.inferred_removed
+        if payload is None:
+            payload = net.encode(texts=(added, removed, i_added, i_removed))
+        commit = Commit(space=self.name, seq=net.seq, payload=payload, prefixes=net.prefixes)
+        commit.removed = [(ASSERTED, row) for row in removed] + [
+            (INFERRED, row) for row in i_removed
         ]
-        commit.added = stamped + [(INFERRED, _row(t), "") for t in net.inferred_added]
+        commit.added = stamped + [(INFERRED, row, "") for row in i_added]
         return commit
 
     def _functional_additions(self, added: list[Triple], stamp: str) -> _Additions:
@@ -160,6 +162,9 @@ def _net(
     gone = {t: None for t in removed if has(t)}
     new = {t: None for t in added if not has(t) or t in gone}
     return [t for t in gone if t not in new], [t for t in new if t not in gone]
+
+
+_FUNCTIONAL_CLASS = {OWL.FunctionalProperty}
 
 
 def _row(t: Triple) -> tuple[str, str, str]:
