@@ -26,7 +26,7 @@ from space.request import ask_store
 from space.session import open_session
 from space.subscription import Callback, Change, Dispatcher, Subscription
 from space.template import Template
-from space.terms import Triple, triple_from_nt
+from space.terms import CACHED, Triple, triple_from_nt
 
 log = logging.getLogger("tspace.client")
 
@@ -402,7 +402,7 @@ def _namespace(iri: URIRef) -> str:
     """Return an IRI up to its last `#` or `/` (memoized: a big changeset repeats its IRIs)."""
     ns = _NAMESPACES.get(iri)
     if ns is None:
-        if len(_NAMESPACES) >= 65536:
+        if len(_NAMESPACES) >= CACHED:
             _NAMESPACES.clear()
         text = str(iri)
         ns = _NAMESPACES[iri] = text[: max(text.rfind("#"), text.rfind("/")) + 1]

@@ -18,7 +18,7 @@ from rdflib.term import Node
 
 from space.errors import MalformedPayload
 from space.prefixes import PrefixMap
-from space.terms import Triple, from_nt, to_nt
+from space.terms import CACHED, Triple, from_nt, to_nt
 
 ROOT = "tspace"
 ASSERTED = "t"
@@ -54,7 +54,7 @@ def unescape(chunk: str) -> str:
     return _ESCAPED_RE.sub(lambda m: chr(int(m.group(1), 16)), chunk)
 
 
-_MEMO_MAX = 65536
+_MEMO_MAX = CACHED
 
 
 def term_chunk(term: Node, prefixes: PrefixMap) -> str:
