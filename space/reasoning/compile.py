@@ -47,7 +47,7 @@ class RuleIndex:
     """Find the joins a triple can start, when it is added or (for noValue) removed.
 
     A new triple `(s, p, o)` starts the joins of `by_po[(p, o)]`, `by_p[p]` and
-    `anywhere` (read directly by the engine's inner loop).
+    `anywhere`, which `starts` gives as one tuple.
     """
 
     def __init__(self) -> None:
@@ -56,6 +56,24 @@ class RuleIndex:
         self.anywhere: list[Entry] = []
         self._removal_by_p: dict[int, list[Entry]] = {}
         self._removal_anywhere: list[Entry] = []
+        self._starts: dict[tuple[int, int], tuple[Entry, ...]] = {}
+        self._starts_by_p: dict[int, tuple[Entry, ...]] = {}
+
+    def starts(self, p: int, o: int) -> tuple[Entry, ...]:
+        """Return the joins a new triple with predicate `p` and object `o` starts, in order.
+
+        Memoized per `(p, o)` pair a rule names, else per predicate: both are
+        bounded by the rules and the vocabulary, never by the values written.
+        """
+        found = self._starts.get((p, o))
+        if found is not None:
+            return found
+        found = self._starts_by_p.get(p)
+        if found is None:
+            found = self._starts_by_p[p] = (*self.by_p.get(p, ()), *self.anywhere)
+        if (p, o) in self.by_po:
+            found = self._starts[(p, o)] = (*self.by_po[(p, o)], *found)
+        return found
 
     def on_removed(self, p: int) -> Iterator[Entry]:
         """Yield the joins whose noValue may accept since a triple with predicate `p` went."""
@@ -64,6 +82,8 @@ class RuleIndex:
 
     def add(self, compiler: JoinCompiler, rule: Rule, order: int) -> CompiledRule:
         """Compile a (checked) rule and index its joins."""
+        self._starts.clear()
+        self._starts_by_p.clear()
         slots = _slots(rule)
         premise_of = {}
         for index, item in enumerate(rule.body):

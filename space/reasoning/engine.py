@@ -11,7 +11,6 @@ each firing's changes fully applied (closure included) before the next.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from itertools import chain
 from pathlib import Path
 
 from rdflib import BNode, Graph, Literal, URIRef
@@ -227,13 +226,13 @@ class RuleEngine:
         """Run the joins each new triple starts until nothing new is derived."""
         store, triples, support, ctx = self._store, self._store.triples, self._support, self._ctx
         touch, agenda = self._log.touch, self._agenda
-        by_po, by_p, anywhere = self._index.by_po, self._index.by_p, self._index.anywhere
+        starts = self._index.starts
         out: list[Match] = []
         position = 0
         while position < len(queue):
             s, p, o = queue[position]
             position += 1
-            for compiled, trigger in chain(by_po.get((p, o), ()), by_p.get(p, ()), anywhere):
+            for compiled, trigger in starts(p, o):
                 trigger(s, p, o, out)
                 if not out:
                     continue
