@@ -21,6 +21,7 @@ import logging
 import os
 import sys
 import time
+from collections import deque
 from pathlib import Path
 
 import zenoh
@@ -31,13 +32,15 @@ from agents.base import Agent, local_name, run_agent
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
 from agents.ownership import PREFIX, Roster, concerned_robot
 from agents.view import AC
-from space import Change, Subscription
+from space import Change, SpaceError, Subscription
 from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
+from space.request import Pending
 from space.terms import Triple
 
 REPO = Path(__file__).resolve().parents[1]
 ONTOLOGY_IRI = URIRef("https://w3id.org/tspace/selfconfig")
 RELOAD_PERIOD = 1.0
+IN_FLIGHT = 64  # answers sent, not yet acknowledged, at most
 
 
 class Reasoner(Agent):
@@ -61,6 +64,7 @@ class Reasoner(Agent):
         self._others: zenoh.Subscriber | None = None
         self._joined: zenoh.LivelinessToken | None = None
         self._mtimes: dict[Path, float] = {}
+        self._unacked: deque[tuple[str | None, Pending]] = deque()
         self._checked = 0.0
 
     @classmethod
@@ -147,6 +151,7 @@ class Reasoner(Agent):
     def shutdown(self) -> None:
         """Withdraw from the per-robot reasoners, then leave the space."""
         try:
+            self._settle()
             if self._joined is not None:
                 self._joined.undeclare()
             if self._others is not None:
@@ -192,7 +197,7 @@ class Reasoner(Agent):
                 return  # another reasoner's answer: this engine concluded the same
             if not self.roster.answers(concerned_robot(self.engine, [*added, *removed])):
                 return  # another reasoner answers, having drawn the same conclusions
-        self._write(delta, change.id)
+        self._write(delta, change.id, wait=False)
 
     def _replaced(self, added: list[Triple], removed: list[Triple]) -> list[Triple]:
         """Return the old values of functional properties that `added` replaces.
@@ -208,9 +213,20 @@ class Reasoner(Agent):
         return out
 
     def _write(
-        self, delta: Delta, cause: str | None, *, inferred_before: set[Triple] | None = None
+        self,
+        delta: Delta,
+        cause: str | None,
+        *,
+        inferred_before: set[Triple] | None = None,
+        wait: bool = True,
     ) -> None:
-        """Write a delta (and its firing records) to the space as one changeset."""
+        """Write a delta (and its firing records) to the space as one changeset.
+
+        Without `wait`, the store's acknowledgement is read later (`_settle`):
+        changes waiting in the queue (a backlog after a cut) are answered without
+        a round trip to the store each, in order; the run loop's tick, after the
+        queue is empty, reads them.
+        """
         assert self.ts is not None and self.engine is not None
         inferred_added, inferred_removed = list(delta.inferred_added), list(delta.inferred_removed)
         if inferred_before is not None:
@@ -231,14 +247,33 @@ class Reasoner(Agent):
             self.log.info("fired %d rule(s) (cause %s): %s", len(rules), cause, ", ".join(rules))
         if not (added or removed or inferred_added or inferred_removed):
             return
-        self.ts.apply(
+        cs = self.ts.changeset(
             added,
             removed,
             inferred_added=inferred_added,
             inferred_removed=inferred_removed,
             cause=cause,
-            timeout=self.args.timeout,
         )
+        if wait:
+            self.ts.send(cs, timeout=self.args.timeout)
+            return
+        self._unacked.append((cause, self.ts.send_later(cs, timeout=self.args.timeout)))
+        if len(self._unacked) > IN_FLIGHT:
+            self._settle(len(self._unacked) - IN_FLIGHT)
+
+    def _settle(self, count: int | None = None) -> None:
+        """Read the acknowledgements of `count` answers in flight (all by default), oldest first.
+
+        An answer the store did not acknowledge is logged, as a failed change is.
+        """
+        while self._unacked and (count is None or count > 0):
+            cause, pending = self._unacked.popleft()
+            try:
+                pending.result()
+            except SpaceError as exc:
+                self.log.warning("answer to change %s: %s", cause, exc)
+            if count is not None:
+                count -= 1
 
     def _robot_of(self, firing: Firing, robots: dict[Node, bool]) -> Node:
         """Return the robot a firing concerned: the first robot among its premises, else `--robot`.
@@ -258,7 +293,11 @@ class Reasoner(Agent):
     # Rules reload
 
     def tick(self) -> None:
-        """Reload the rules when a rules file changed (checked every second)."""
+        """Read the answers' acknowledgements; reload the rules when a rules file changed.
+
+        The rules files are checked every second.
+        """
+        self._settle()
         if time.monotonic() - self._checked < RELOAD_PERIOD:
             return
         self._checked = time.monotonic()

@@ -22,7 +22,7 @@ from space import keys
 from space.changeset import Changeset, pack, unpack
 from space.errors import MalformedPayload, QueryError, TemplateError
 from space.prefixes import PrefixMap
-from space.request import ask_store
+from space.request import Pending, ask_store
 from space.session import open_session
 from space.subscription import Callback, Change, Dispatcher, Subscription
 from space.template import Template
@@ -139,6 +139,15 @@ class TripleSpace:
         """
         ask_store(self.session, self._key("write"), cs.encode(), timeout, what="write")
         return cs.id
+
+    def send_later(self, cs: Changeset, *, timeout: float = 5.0) -> Pending:
+        """Send a changeset now and read the acknowledgement later (`send`'s pipelined twin).
+
+        Returns at once; `result()` of what it returns blocks as `send` does and
+        raises what `send` raises. Changesets sent one after the other are applied
+        in that order, so a writer may keep several in flight.
+        """
+        return Pending(self.session, self._key("write"), cs.encode(), timeout, what="write")
 
     def send_nowait(self, cs: Changeset) -> str:
         """Send a changeset without waiting (fire-and-forget twin of `send`); return its id."""

@@ -25,19 +25,55 @@ def ask_store(
     """
     deadline = time.monotonic() + timeout
     while True:
-        left = deadline - time.monotonic()
-        replies = list(
-            session.get(
-                key,
-                payload=payload,
-                timeout=max(left, 0.001),
-                consolidation=zenoh.ConsolidationMode.NONE,
-                congestion_control=zenoh.CongestionControl.BLOCK,
-            )
-        )
+        replies = list(_get(session, key, payload, deadline - time.monotonic()))
         if replies or deadline - time.monotonic() < 0.05:
             break
         time.sleep(0.05)  # nobody answered at once: no queryable reachable yet
+    return _decode(replies, key, timeout, what)
+
+
+class Pending:
+    """A request sent to the store whose reply is read later: `ask_store`'s non-blocking twin.
+
+    Constructing it sends the request and returns at once; `result()` blocks for
+    the reply. Requests from one session reach the store in the order they were
+    sent, so a caller may send several before reading their replies (pipelining).
+    A request that found no store at all is sent again by `result()`, until its
+    timeout, as `ask_store` does: after any sent since.
+    """
+
+    def __init__(
+        self, session: zenoh.Session, key: str, payload: bytes, timeout: float, *, what: str
+    ) -> None:
+        self._session, self._key, self._payload, self._what = session, key, payload, what
+        self._timeout = timeout
+        self._deadline = time.monotonic() + timeout
+        self._replies = _get(session, key, payload, timeout)
+
+    def result(self) -> dict:
+        """Wait for the reply and return it decoded.
+
+        Raises:
+            SpaceUnavailable, QueryError, ChangesetRejected: as `ask_store`.
+        """
+        replies = list(self._replies)
+        left = self._deadline - time.monotonic()
+        if not replies and left >= 0.05:
+            return ask_store(self._session, self._key, self._payload, left, what=self._what)
+        return _decode(replies, self._key, self._timeout, self._what)
+
+
+def _get(session: zenoh.Session, key: str, payload: bytes, timeout: float) -> zenoh.Handler:
+    return session.get(
+        key,
+        payload=payload,
+        timeout=max(timeout, 0.001),
+        consolidation=zenoh.ConsolidationMode.NONE,
+        congestion_control=zenoh.CongestionControl.BLOCK,
+    )
+
+
+def _decode(replies: list[zenoh.Reply], key: str, timeout: float, what: str) -> dict:
     for reply in replies:
         if reply.ok is not None:
             value = unpack(reply.ok.payload.to_bytes())
