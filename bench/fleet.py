@@ -222,7 +222,10 @@ def plot(sizes: dict[int, list[list[float]]], load: dict, cuts: list[list]) -> P
 def main(args: argparse.Namespace) -> None:
     log = Path(tempfile.mkdtemp(prefix="fleet-bench-")) / "reasoner.log"
     print(f"reasoner logs: {log}", flush=True)
-    sizes = {n: [update_latency(n, args.samples, log) for _ in range(args.runs)] for n in SIZES}
+    sizes: dict[int, list[list[float]]] = {n: [] for n in SIZES}
+    for _ in range(args.runs):  # sizes in turn: a slow spell of a shared machine hits them all
+        for n in SIZES:
+            sizes[n].append(update_latency(n, args.samples, log))
     base = median([percentile(run, 50) for run in sizes[SIZES[0]]])
     rows = []
     for n in SIZES:
