@@ -24,7 +24,7 @@ import zenoh
 from rdflib import URIRef
 from rdflib.term import Node
 
-from agents.view import AC, View
+from agents.view import AC, RECORD_PREFIX, View
 from space import Change, SpaceError, SpaceTimeout, SpaceUnavailable, Subscription, TripleSpace
 from space.cli.options import add_connect
 from space.presence import declare_agent
@@ -68,6 +68,8 @@ class Agent:
         per_robot: False for agents serving the whole space (named just `kind`).
         keeps_view: False for agents that never read `view` (it is then left empty:
             applying a 600-triple change to it costs milliseconds).
+        reads_records: True for agents that read the reasoner's firing records from
+            changes (the HMI); the others' subscriptions leave them out unparsed.
         args: the parsed command line.
         robot: the robot this agent serves.
         name: the agent's name in logs, liveliness and changesets.
@@ -78,6 +80,7 @@ class Agent:
     kind: ClassVar[str] = "agent"
     per_robot: ClassVar[bool] = True
     keeps_view: ClassVar[bool] = True
+    reads_records: ClassVar[bool] = False
 
     def __init__(self, args: argparse.Namespace) -> None:
         self.args = args
@@ -136,7 +139,13 @@ class Agent:
         asserted graph on its own.
         """
         assert self.ts is not None
-        return self.ts.subscribe(None, self._inbox.put, snapshot=True, timeout=self.args.timeout)
+        return self.ts.subscribe(
+            None,
+            self._inbox.put,
+            snapshot=True,
+            timeout=self.args.timeout,
+            skip_subjects=None if self.reads_records else RECORD_PREFIX,
+        )
 
     def run(self) -> None:
         """Handle changes and tick until `stop()`.

@@ -126,7 +126,14 @@ class Reasoner(Agent):
             # Declared first: the reasoners present now are known once the engine is built.
             self._others = self.roster.watch(self.ts.session, self.ts.space)
         engine = self._build()
-        subscription = self.ts.subscribe(None, self._inbox.put, timeout=self.args.timeout)
+        # Its own answers and every firing record are left out before parsing: it ignores them.
+        subscription = self.ts.subscribe(
+            None,
+            self._inbox.put,
+            timeout=self.args.timeout,
+            skip_own=True,
+            skip_subjects=FIRING_PREFIX,
+        )
         if self.roster is not None and self._joined is None:
             # Subscribed, then joined, then reading: no change falls between two reasoners.
             self._joined = self.roster.join(self.ts.session, self.ts.space)
@@ -183,11 +190,10 @@ class Reasoner(Agent):
     # Changes
 
     def on_change(self, change: Change) -> None:
-        """Apply another agent's changeset and answer it with the conclusions."""
-        if change.agent == self.name or self.engine is None:
+        """Apply another agent's changeset (firing records left out) and answer it."""
+        if self.engine is None:
             return
-        added = [t for t in change.added if not is_record(t)]
-        removed = [t for t in change.removed if not is_record(t)]
+        added, removed = list(change.added), list(change.removed)
         removed += self._replaced(added, removed)
         if not added and not removed:
             return

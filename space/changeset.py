@@ -13,7 +13,7 @@ from space.errors import MalformedPayload
 from space.terms import Triple, triple_from_nt, triple_to_nt
 
 WIRE_VERSION = 1
-_LISTS = ("add", "del", "iadd", "idel")
+LISTS = ("add", "del", "iadd", "idel")  # the wire names of the four triple lists
 
 
 @dataclass
@@ -60,7 +60,7 @@ class Changeset:
             wire["prefixes"] = self.prefixes
         if texts is None:
             texts = [[triple_to_nt(t) for t in triples] for triples in self._lists()]
-        for name, listed in zip(_LISTS, texts, strict=True):
+        for name, listed in zip(LISTS, texts, strict=True):
             if listed:
                 wire[name] = listed
         return wire
@@ -82,7 +82,7 @@ class Changeset:
         if not isinstance(wire, dict):
             raise MalformedPayload("a changeset payload is a msgpack map")
         try:
-            lists = [[triple_from_nt(t) for t in wire.get(name) or ()] for name in _LISTS]
+            lists = [[triple_from_nt(t) for t in wire.get(name) or ()] for name in LISTS]
             prefixes = wire.get("prefixes") or {}
             if not isinstance(prefixes, dict):
                 raise MalformedPayload("'prefixes' must be a map")

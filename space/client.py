@@ -290,11 +290,16 @@ class TripleSpace:
         *,
         snapshot: bool = False,
         timeout: float = 5.0,
+        skip_own: bool = False,
+        skip_subjects: str | None = None,
     ) -> Subscription:
         """Call `callback(change)` for every later changeset with triples matching `template`.
 
         With `snapshot=True` the first call carries the current matching state.
         Callbacks run in this handle's dispatcher thread, one at a time, in store order.
+        `skip_own` leaves out the changesets this handle's agent wrote, and
+        `skip_subjects` (an IRI prefix) the triples whose subject starts with it,
+        both before their terms are parsed (a big change costs nothing to ignore).
 
         Raises:
             SpaceUnavailable: no store answered (the sequence number is needed to fill gaps).
@@ -307,7 +312,13 @@ class TripleSpace:
                 self.session.info.declare_transport_events_listener(self._on_transport),
                 self.session.declare_subscriber(self._key("seq"), self._on_heartbeat),
             ]
-        sub = Subscription(self._dispatcher, t, callback)
+        sub = Subscription(
+            self._dispatcher,
+            t,
+            callback,
+            skip_agent=self.agent if skip_own else None,
+            skip_subjects=skip_subjects,
+        )
         self._dispatcher.add(sub)
         sub.attach(
             self.session.declare_subscriber(self._key("changes"), self._dispatcher.feed(sub))
@@ -316,11 +327,12 @@ class TripleSpace:
         try:
             if snapshot:
                 graph, seq = self.snapshot(t, timeout=timeout)
+                state = [x for x in graph if not sub.skips(x)]
                 initial = Change(
                     agent="",
                     seq=seq,
-                    added=list(graph),
-                    bindings=[b for x in graph if (b := t.match(x)) is not None],
+                    added=state,
+                    bindings=[b for x in state if (b := t.match(x)) is not None],
                 )
             else:
                 seq, initial = self._seq(timeout), None

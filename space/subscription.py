@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import zenoh
 from rdflib.term import Node
 
-from space.changeset import Changeset
+from space.changeset import LISTS, Changeset, unpack
 from space.errors import MalformedPayload, SpaceError
 from space.template import Template
 
@@ -37,12 +37,25 @@ Callback = Callable[[Change], None]
 class Subscription:
     """One `subscribe()`: a template, a callback and the last sequence number delivered.
 
-    Close it with `close()` (or `TripleSpace.unsubscribe`).
+    `skip_agent` (a writer's name) and `skip_subjects` (an IRI prefix) leave
+    out, before their terms are parsed, that writer's changesets and the
+    triples whose subject starts with the prefix: a process that ignores them
+    does not pay to parse them. Close it with `close()` (or `TripleSpace.unsubscribe`).
     """
 
-    def __init__(self, dispatcher: Dispatcher, template: Template, callback: Callback) -> None:
+    def __init__(
+        self,
+        dispatcher: Dispatcher,
+        template: Template,
+        callback: Callback,
+        *,
+        skip_agent: str | None = None,
+        skip_subjects: str | None = None,
+    ) -> None:
         self.template = template
         self.callback = callback
+        self.skip_agent = skip_agent
+        self.skip_subjects = skip_subjects
         self.last_seq = 0
         self.ready = False
         self.early: list[bytes] = []
@@ -60,6 +73,29 @@ class Subscription:
             self._subscriber.undeclare()
             self._subscriber = None
         self._dispatcher.forget(self)
+
+    def decode(self, payload: bytes) -> tuple[int, Changeset | None]:
+        """Return a change's sequence number and changeset; None for a changeset skipped unparsed.
+
+        Raises:
+            MalformedPayload: not msgpack, not a changeset, or (if parsed) a term is invalid.
+        """
+        wire = unpack(payload)
+        if not isinstance(wire, dict):
+            raise MalformedPayload("a changeset payload is a msgpack map")
+        try:
+            seq = int(wire.get("seq") or 0)
+        except (TypeError, ValueError) as exc:
+            raise MalformedPayload(f"bad changeset seq: {exc}") from exc
+        if self.skip_agent is not None and wire.get("agent") == self.skip_agent:
+            return seq, None
+        if self.skip_subjects is not None:
+            wire = _without_subjects(wire, f"<{self.skip_subjects}")
+        return seq, Changeset.from_wire(wire)
+
+    def skips(self, triple: tuple[Node, Node, Node]) -> bool:
+        """Return True for a triple this subscription leaves out (its subject has the prefix)."""
+        return self.skip_subjects is not None and str(triple[0]).startswith(self.skip_subjects)
 
     def filter(self, cs: Changeset) -> Change | None:
         """Return the matching part of a changeset, or None if nothing matches."""
@@ -99,6 +135,28 @@ class Subscription:
             inferred_removed=lists[3],
             bindings=bindings,
         )
+
+
+def _without_subjects(wire: dict, prefix: str) -> dict:
+    """Return a changeset map without the triples whose subject's text starts with `prefix`.
+
+    Malformed entries are kept, for `Changeset.from_wire` to reject.
+    """
+    out = dict(wire)
+    for name in LISTS:
+        listed = wire.get(name)
+        if not isinstance(listed, list):
+            continue
+        kept = []
+        for triple in listed:
+            try:
+                if triple[0].startswith(prefix):
+                    continue
+            except (TypeError, IndexError, KeyError, AttributeError):
+                pass
+            kept.append(triple)
+        out[name] = kept
+    return out
 
 
 Fetch = Callable[[int, int], list[bytes]]
@@ -201,15 +259,15 @@ class Dispatcher:
 
     def _process(self, sub: Subscription, payload: bytes) -> None:
         try:
-            cs = Changeset.decode(payload)
+            seq, cs = sub.decode(payload)
         except MalformedPayload as exc:
             log.warning("malformed change skipped: %s", exc)
             return
-        if cs.seq <= sub.last_seq:
+        if seq <= sub.last_seq:
             return
-        if cs.seq > sub.last_seq + 1:
-            self._fill_gap(sub, cs.seq - 1)
-        self._deliver(sub, cs)
+        if seq > sub.last_seq + 1:
+            self._fill_gap(sub, seq - 1)
+        self._deliver(sub, seq, cs)
 
     def _fill_gap(self, sub: Subscription, last: int) -> None:
         try:
@@ -219,15 +277,17 @@ class Dispatcher:
             return
         for payload in missed:
             try:
-                cs = Changeset.decode(payload)
+                seq, cs = sub.decode(payload)
             except MalformedPayload as exc:
                 log.warning("malformed logged change skipped: %s", exc)
                 continue
-            if cs.seq > sub.last_seq:
-                self._deliver(sub, cs)
+            if seq > sub.last_seq:
+                self._deliver(sub, seq, cs)
 
-    def _deliver(self, sub: Subscription, cs: Changeset) -> None:
-        sub.last_seq = cs.seq
+    def _deliver(self, sub: Subscription, seq: int, cs: Changeset | None) -> None:
+        sub.last_seq = seq
+        if cs is None:
+            return
         change = sub.filter(cs)
         if change is not None:
             self._call(sub, change)
