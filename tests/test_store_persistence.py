@@ -72,3 +72,18 @@ def test_sigterm_stops_the_server_cleanly(tmp_path):
     srv.start()
     assert srv.stop(signal.SIGTERM) == 0
     assert "stopping" in srv.logs()
+
+
+def test_serve_logs_one_line_per_client_that_comes_and_goes(tmp_path):
+    srv = Server(tmp_path / "data")
+    srv.start()
+    try:
+        with TripleSpace.open(srv.endpoint, space="clients") as ts:
+            zid = str(ts.session.zid())
+            ts.write([(AC.robot1, AC.charge_percent, Literal(50))])
+            wait_for(lambda: f"client {zid} connected" in srv.logs(), 10, "the arrival line")
+        wait_for(lambda: f"client {zid} disconnected" in srv.logs(), 10, "the departure line")
+        lines = [line for line in srv.logs().splitlines() if zid in line]
+        assert len(lines) == 2, lines
+    finally:
+        srv.stop()
