@@ -208,8 +208,9 @@ def plot(sizes: dict[int, list[list[float]]], load: dict, cuts: list[list]) -> P
     middle.legend(loc="upper left")
     memory.legend(loc="upper right")
     if cuts:
-        labels = [f"{row[0]}\n{row[1]:g}/s" for row in cuts]
+        labels = [row[0].replace("=", "=\n") + f"\n{row[1]:g}/s" for row in cuts]
         right.bar(range(len(cuts)), [row[4] for row in cuts], tick_label=labels)
+        right.tick_params(axis="x", labelsize=8)
         right.axhline(2.0, color="grey", linestyle=":", label="2 s")
         right.legend()
     right.set(ylabel="seconds after the link is back (median)")
