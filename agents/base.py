@@ -27,6 +27,7 @@ from rdflib.term import Node
 from agents.view import AC, RECORD_PREFIX, View
 from space import Change, SpaceError, SpaceTimeout, SpaceUnavailable, Subscription, TripleSpace
 from space.cli.options import add_connect
+from space.heap import freeze_startup
 from space.presence import declare_agent
 
 Values = Mapping[tuple[Node, Node], Node | None]
@@ -302,6 +303,7 @@ def run_agent(cls: type[Agent], argv: Sequence[str] | None = None) -> int:
     }
     try:
         agent.setup()
+        freeze_startup()
         agent.run()
         agent.log.info("stopping")
         return 0

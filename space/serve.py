@@ -11,6 +11,7 @@ from pathlib import Path
 
 import zenoh
 
+from space.heap import freeze_startup
 from space.store.server import StoreServer
 from space.zconfig import make_config
 
@@ -72,6 +73,7 @@ def serve_forever(**kwargs: object) -> None:
                 log.info("routing only (no store)")
             else:
                 log.info("serving spaces from %s", server.data_dir)
+            freeze_startup()
             stop.wait()
             log.info("stopping")
     finally:
