@@ -1,6 +1,7 @@
 """The TSC operations of TripleSpace against a real router + store process."""
 
 import threading
+from itertools import pairwise
 
 import pytest
 import zenoh
@@ -202,6 +203,30 @@ def test_write_nowait_arrives(ts):
     ts.write_nowait([(AC.s, AC.p, Literal(i)) for i in range(3)])
     wait_for(lambda: seen, what="fire-and-forget change")
     assert len(ts.query(None)) == 3
+
+
+def test_changesets_sent_later_are_applied_in_order_and_acknowledged(ts):
+    level = AC.robot1_battery, AC.battery_level
+    ts.write(ROBOT)
+    levels = ["normal", "low", "very low", "low", "normal", "very low"]
+    pending = [
+        ts.send_later(ts.changeset([(*level, Literal(new))], [(*level, Literal(old))]))
+        for old, new in pairwise(levels)
+    ]
+    seqs = [p.result()["seq"] for p in pending]
+    assert seqs == list(range(seqs[0], seqs[0] + len(pending)))  # each applied, in order
+    assert set(ts.query((*level, None))) == {(*level, Literal("very low"))}
+
+
+def test_send_later_without_a_store_fails_at_result(tmp_path):
+    from conftest import free_port
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with zenoh.open(make_config(mode="router", listen=[endpoint])):
+        with TripleSpace.open(endpoint, space="nostore") as ts:
+            pending = ts.send_later(ts.changeset(ROBOT, []), timeout=0.5)
+            with pytest.raises(SpaceUnavailable, match="no store answered"):
+                pending.result()
 
 
 def test_iri_unaffected_by_unregistered_prefix(ts):
