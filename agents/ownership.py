@@ -72,7 +72,14 @@ def _roster_key(space: str, entry: str = "*") -> str:
 
 
 class Roster:
-    """The per-robot reasoners of a space, in the order they joined.
+    """The per-robot reasoners of a space: when each joined, and from which change on it answers.
+
+    A reasoner answers the changes after the sequence number of the state it
+    loaded (`start`); the changes up to it are in what it loaded, and the
+    reasoners before it answer them. Every reasoner decides by the changes'
+    sequence numbers, so who answers a change does not depend on when each
+    learns of a newcomer, only (for a change after `start` that another reads
+    before the newcomer's token arrives) may two answer it.
 
     `watch` feeds it from a liveliness subscriber (on a Zenoh thread); the
     agent's thread reads it. Every method takes a lock and never blocks otherwise.
@@ -83,36 +90,47 @@ class Roster:
 
     def __init__(self, me: str) -> None:
         self.me = me
-        self._joined: dict[str, int] = {}
+        self._joined: dict[str, tuple[int, int]] = {}  # name -> (join time, start)
         self._lock = threading.Lock()
 
     def watch(self, session: zenoh.Session, space: str) -> zenoh.Subscriber:
         """Follow the reasoners' tokens (those present now first); the caller owns it."""
 
         def on_sample(sample: zenoh.Sample) -> None:
-            stamp, _, name = str(sample.key_expr).rsplit("/", 1)[1].partition("-")
+            entry = str(sample.key_expr).rsplit("/", 1)[1].split("-", 2)
+            if len(entry) != 3 or not (entry[0].isdigit() and entry[1].isdigit()):
+                return  # not a reasoner's token of this version
+            name = keys.unescape(entry[2])
             with self._lock:
-                if sample.kind == zenoh.SampleKind.PUT and stamp.isdigit():
-                    self._joined[keys.unescape(name)] = int(stamp)
+                if sample.kind == zenoh.SampleKind.PUT:
+                    self._joined[name] = (int(entry[0]), int(entry[1]))
                 else:
-                    self._joined.pop(keys.unescape(name), None)
+                    self._joined.pop(name, None)
 
         return session.liveliness().declare_subscriber(_roster_key(space), on_sample, history=True)
 
-    def join(self, session: zenoh.Session, space: str) -> zenoh.LivelinessToken:
-        """Declare that this reasoner answers from now on; the caller owns the token."""
+    def join(self, session: zenoh.Session, space: str, start: int) -> zenoh.LivelinessToken:
+        """Declare that this reasoner answers the changes after `start`; the caller owns it."""
         stamp = time.time_ns()
         with self._lock:
-            self._joined[self.me] = stamp
+            self._joined[self.me] = (stamp, start)
         return session.liveliness().declare_token(
-            _roster_key(space, f"{stamp}-{keys.escape(self.me)}")
+            _roster_key(space, f"{stamp}-{start}-{keys.escape(self.me)}")
         )
 
-    def answers(self, robot: Node | None) -> bool:
-        """Return True if this reasoner answers a change about `robot` (None: shared)."""
+    def answers(self, robot: Node | None, seq: int | None = None) -> bool:
+        """Return True if this reasoner answers change `seq` about `robot` (None: shared).
+
+        A robot's own reasoner answers for it; the leader (the first to join)
+        answers the rest. Without `seq`, every reasoner present counts.
+        """
         with self._lock:
-            joined = dict(self._joined)
+            joined = {
+                name: stamp
+                for name, (stamp, start) in self._joined.items()
+                if seq is None or start < seq
+            }
         if robot is not None and reasoner_name(robot) in joined:
             return reasoner_name(robot) == self.me
-        leader = min(joined, key=lambda name: (joined[name], name), default=self.me)
+        leader = min(joined, key=lambda name: (joined[name], name), default=None)
         return leader == self.me

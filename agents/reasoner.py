@@ -66,6 +66,7 @@ class Reasoner(Agent):
         self._mtimes: dict[Path, float] = {}
         self._unacked: deque[tuple[str | None, Pending]] = deque()
         self._checked = 0.0
+        self._loaded_seq = 0
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -118,8 +119,8 @@ class Reasoner(Agent):
     def subscribe(self) -> Subscription:
         """Subscribe, then load the asserted graph into a fresh engine and reconcile.
 
-        Changes arriving meanwhile wait in the queue and are applied after the
-        load; applying a change the loaded state already reflects changes nothing.
+        Changes arriving meanwhile wait in the queue; those the loaded state
+        holds already (by sequence number) are skipped after the load.
         """
         assert self.ts is not None
         if self.roster is not None and self._others is None:
@@ -134,23 +135,24 @@ class Reasoner(Agent):
             skip_own=True,
             skip_subjects=FIRING_PREFIX,
         )
-        if self.roster is not None and self._joined is None:
-            # Subscribed, then joined, then reading: no change falls between two reasoners.
-            self._joined = self.roster.join(self.ts.session, self.ts.space)
         try:
             self._seed()
-            asserted = set(self.ts.query(None, graph="asserted", timeout=self.args.timeout))
-            inferred = set(self.ts.query(None, graph="inferred", timeout=self.args.timeout))
+            asserted, inferred, seq = self.ts.graphs(timeout=self.args.timeout)
         except BaseException:
             self.ts.unsubscribe(subscription)  # setup() may retry: no second delivery
             raise
+        if self.roster is not None and self._joined is None:
+            # Subscribed, read, then joined: the changes after what it read are its own.
+            self._joined = self.roster.join(self.ts.session, self.ts.space, seq)
         self.firings.restore(asserted)
-        delta = engine.load(t for t in asserted if not is_record(t))
-        self.engine = engine
+        # In a canonical order: engines that load the same state fire the same way.
+        state = sorted((t for t in asserted if not is_record(t)), key=_canonical)
+        delta = engine.load(state)
+        self.engine, self._loaded_seq = engine, seq
         self.started = True
         self.log.info("loaded %d rules over %d asserted triples", len(engine.rules), len(asserted))
         if self.roster is None or self.roster.answers(None):
-            self._write(delta, None, inferred_before=inferred)
+            self._write(delta, None, inferred_before=set(inferred))
         else:
             self.log.info("another per-robot reasoner leads: it concludes the load")
         return subscription
@@ -191,8 +193,8 @@ class Reasoner(Agent):
 
     def on_change(self, change: Change) -> None:
         """Apply another agent's changeset (firing records left out) and answer it."""
-        if self.engine is None:
-            return
+        if self.engine is None or change.seq <= self._loaded_seq:
+            return  # in the state loaded
         added, removed = list(change.added), list(change.removed)
         removed += self._replaced(added, removed)
         if not added and not removed:
@@ -201,7 +203,8 @@ class Reasoner(Agent):
         if self.roster is not None:
             if change.agent.startswith(PREFIX):
                 return  # another reasoner's answer: this engine concluded the same
-            if not self.roster.answers(concerned_robot(self.engine, [*added, *removed])):
+            robot = concerned_robot(self.engine, [*added, *removed])
+            if not self.roster.answers(robot, change.seq):
                 return  # another reasoner answers, having drawn the same conclusions
         self._write(delta, change.id, wait=False)
 
@@ -324,7 +327,7 @@ class Reasoner(Agent):
         try:
             engine = self._build()
             inferred_before = set(self.engine.triples(Origin.INFERRED))
-            delta = engine.load(self.engine.triples(Origin.ASSERTED))
+            delta = engine.load(sorted(self.engine.triples(Origin.ASSERTED), key=_canonical))
         except RuleError as exc:
             self.log.error("rules not reloaded, the previous rules stay in force: %s", exc)
             return
@@ -332,6 +335,10 @@ class Reasoner(Agent):
         self.log.info("rules reloaded: %d rules", len(engine.rules))
         if self.roster is None or self.roster.answers(None):
             self._write(delta, None, inferred_before=inferred_before)
+
+
+def _canonical(triple: Triple) -> tuple[str, str, str]:
+    return (triple[0].n3(), triple[1].n3(), triple[2].n3())
 
 
 def _mtime(path: Path) -> float:

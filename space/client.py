@@ -256,6 +256,20 @@ class TripleSpace:
         reply = self._ask({"op": "snapshot", "template": t.to_wire()}, timeout)
         return self._graph(reply), int(reply.get("seq") or 0)
 
+    def graphs(
+        self, template: TemplateLike = None, *, timeout: float = 5.0
+    ) -> tuple[list[Triple], list[Triple], int]:
+        """Return the matching asserted and inferred triples, apart, from one read.
+
+        Also returns the sequence number that read reflects: a subscriber that
+        subscribed first knows which of the changes it receives the read holds.
+        """
+        t = self._template(template)
+        reply = self._ask({"op": "snapshot", "template": t.to_wire()}, timeout)
+        asserted = [triple_from_nt(x) for x in reply.get(keys.ASSERTED) or ()]
+        inferred = [triple_from_nt(x) for x in reply.get(keys.INFERRED) or ()]
+        return asserted, inferred, int(reply.get("seq") or 0)
+
     def load_prefixes(self, *, timeout: float = 5.0) -> PrefixMap:
         """Learn the prefixes registered in the space (for templates and display); return them."""
         reply = self._ask({"op": "prefixes"}, timeout)

@@ -120,6 +120,9 @@ def test_inferred_graph_is_kept_apart(ts):
     assert set(ts.query(None, graph="asserted")) == set(ROBOT[:1])
     assert set(ts.query(None, graph="inferred")) == {(AC.robot1, RDF.type, AC.Agent)}
     assert len(ts.query(None)) == 2
+    asserted, inferred, seq = ts.graphs()
+    assert (asserted, inferred) == (list(ROBOT[:1]), [(AC.robot1, RDF.type, AC.Agent)])
+    assert seq == ts.snapshot()[1] > 0
 
 
 def test_spaces_do_not_see_each_other(server, ts, space_name):
