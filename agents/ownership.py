@@ -7,16 +7,18 @@ Writing whole keeps every engine equal to the space: split by robot, a dock
 released by one robot and claimed by another would arrive as two halves, in
 either order.
 
-A reasoner joins once it subscribed to the changes and before it reads the
-space, with a liveliness token `tspace/<space>/@reasoners/<join time>-<name>`.
-A robot owns itself, its devices and its skills: a change about one robot's
-things is answered by that robot's reasoner if it has joined. Any other change
-(about no robot or several, or about a robot without a reasoner) is answered
-by the leader: the reasoner that joined first. The leader also writes what
-loading the space concluded; those joining later find it done. While a
-reasoner joins or leaves, a change may be answered twice (the second answer
-changes nothing), never not at all: whoever joined already queues every
-change it has not read.
+A reasoner subscribes to the changes, reads the space (the state after change
+`start`), then joins with a liveliness token
+`tspace/<space>/@reasoners/<join time>-<start>-<name>`: it answers the changes
+after `start`, and those up to it are answered by the reasoners before it. A
+robot owns itself, its devices and its skills: a change about one robot's
+things is answered by that robot's reasoner if it had joined by then. Any
+other change (about no robot or several, or about a robot without a reasoner)
+is answered by the leader: the reasoner that joined first. The leader also
+writes what loading the space concluded. Engines load in a canonical order, so
+the same state gives the same conclusions in every one. A change may be
+answered twice (by a reasoner that did not see a newcomer's token yet; the
+second answer changes nothing), never not at all.
 """
 
 from __future__ import annotations
