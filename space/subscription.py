@@ -101,27 +101,16 @@ class Subscription:
         """Return the matching part of a changeset, or None if nothing matches."""
         t = self.template
         if t.s is None and t.p is None and t.o is None:  # everything matches, nothing binds
-            if cs.is_empty():
-                return None
-            return Change(
-                id=cs.id,
-                agent=cs.agent,
-                timestamp=cs.timestamp,
-                cause=cs.cause,
-                seq=cs.seq,
-                prefixes=cs.prefixes,
-                added=cs.added,
-                removed=cs.removed,
-                inferred_added=cs.inferred_added,
-                inferred_removed=cs.inferred_removed,
-            )
-        lists = [
-            [x for x in triples if t.match(x) is not None]
-            for triples in (cs.added, cs.removed, cs.inferred_added, cs.inferred_removed)
-        ]
+            lists = [cs.added, cs.removed, cs.inferred_added, cs.inferred_removed]
+            bindings: list = []
+        else:
+            lists = [
+                [x for x in triples if t.match(x) is not None]
+                for triples in (cs.added, cs.removed, cs.inferred_added, cs.inferred_removed)
+            ]
+            bindings = [b for x in (y for ys in lists for y in ys) if (b := t.match(x))]
         if not any(lists):
             return None
-        bindings = [b for x in (y for ys in lists for y in ys) if (b := t.match(x))]
         return Change(
             id=cs.id,
             agent=cs.agent,
