@@ -38,13 +38,13 @@ class Replica:
         root: str,
         db: StoreDB,
         space: Callable[[str], SpaceState],
-        adopt: Callable[[SpaceState], None],
+        forget: Callable[[str], None],
     ) -> None:
         self.session = session
         self.root = root
         self.db = db
         self.space = space
-        self.adopt = adopt
+        self.forget = forget
 
     def catch_up(self) -> None:
         """Fetch from the leader what this store missed, space by space (blocks)."""
@@ -68,6 +68,7 @@ class Replica:
             state = self.space(space)
             if net.seq > state.seq + 1:
                 self._fetch(state, net.seq - 1)
+                state = self.space(space)  # a new state if the space was copied whole
             if net.seq == state.seq + 1:
                 self._install(state, [payload])
             touched[space] = state.seq
@@ -125,14 +126,8 @@ class Replica:
         rows = [tuple(str(x) for x in row) for row in reply["rows"]]
         prefixes = {str(k): str(v) for k, v in reply["prefixes"].items()}
         self.db.replace(name, rows, prefixes, (seq, last))  # type: ignore[arg-type]
-        state = SpaceState(name)
-        state.prefixes.update(prefixes)
-        state.load(rows)  # type: ignore[arg-type]
-        state.seq = seq
-        self.adopt(state)
-        log.warning(
-            "space %s copied whole from the leader (%d triples, seq %d)", name, len(rows), seq
-        )
+        self.forget(name)  # the next use loads it from the database
+        log.warning("space %s copied whole from the leader (seq %d, %d rows)", name, seq, len(rows))
 
     def _install(self, state: SpaceState, payloads: list[bytes]) -> None:
         commits = []

@@ -93,7 +93,7 @@ class StoreServer:
         Blocks until this store leads or has caught up with the leader.
         """
         self._db = StoreDB(self.data_dir, durable=self.durable, log_keep=self.log_keep)
-        self._replica = Replica(self.session, self.root, self._db, self._space, self._adopt)
+        self._replica = Replica(self.session, self.root, self._db, self._space, self._forget)
         for name in self._db.spaces():
             self._space(name)
         self.zid = str(self.session.zid())
@@ -348,9 +348,9 @@ class StoreServer:
             }
         )
 
-    def _adopt(self, state: SpaceState) -> None:
-        """Serve `state` for its space from now on (a follower's fresh copy)."""
-        self._spaces[state.name] = state
+    def _forget(self, name: str) -> None:
+        """Drop a space's state from memory (its database was replaced: `_space` reloads it)."""
+        self._spaces.pop(name, None)
 
     def _reject(self, req: _Request, exc: Exception) -> None:
         what = "rejected" if isinstance(exc, QueryError) else "malformed, skipped:"
