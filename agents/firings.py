@@ -18,10 +18,10 @@ from datetime import UTC, datetime
 from rdflib import RDF, Graph, Literal, URIRef
 from rdflib.term import Node
 
-from agents.view import AC
+from agents.view import AC, RECORD_PREFIX
 from space.terms import Triple
 
-FIRING_PREFIX = str(AC) + "firing_"
+FIRING_PREFIX = RECORD_PREFIX  # the subjects of firing records
 RULE_NAME = AC.rule_name
 
 

@@ -34,7 +34,7 @@ from rdflib.term import Node
 from agents.base import local_name
 from agents.view import AC
 from space import keys
-from space.reasoning import Firing, RuleEngine
+from space.reasoning import RuleEngine
 from space.terms import Triple
 
 PREFIX = "reasoner."
@@ -59,14 +59,6 @@ def concerned_robot(engine: RuleEngine, triples: Iterable[Triple]) -> Node | Non
     """Return the one robot whose things a change touches; None if it touches none or several."""
     robots = {owner(engine, s) for s, _p, _o in triples} - {None}
     return robots.pop() if len(robots) == 1 else None
-
-
-def firing_robot(engine: RuleEngine, firing: Firing) -> Node | None:
-    """Return the robot a firing concerned: the first robot among its premises, or None."""
-    for s, _p, _o in firing.triggers:
-        if (s, RDF.type, AC.Robot) in engine:
-            return s
-    return None
 
 
 def _roster_key(space: str, entry: str = "*") -> str:

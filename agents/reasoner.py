@@ -33,9 +33,10 @@ from agents.firings import FIRING_PREFIX, FiringLog, is_record
 from agents.ownership import PREFIX, Roster, concerned_robot
 from agents.view import AC
 from space import Change, SpaceError, Subscription
+from space.heap import refreeze
 from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
 from space.request import Pending
-from space.terms import Triple
+from space.terms import Triple, triple_to_nt
 
 REPO = Path(__file__).resolve().parents[1]
 ONTOLOGY_IRI = URIRef("https://w3id.org/tspace/selfconfig")
@@ -146,7 +147,7 @@ class Reasoner(Agent):
             self._joined = self.roster.join(self.ts.session, self.ts.space, seq)
         self.firings.restore(asserted)
         # In a canonical order: engines that load the same state fire the same way.
-        state = sorted((t for t in asserted if not is_record(t)), key=_canonical)
+        state = sorted((t for t in asserted if not is_record(t)), key=triple_to_nt)
         delta = engine.load(state)
         self.engine, self._loaded_seq = engine, seq
         self.started = True
@@ -327,18 +328,15 @@ class Reasoner(Agent):
         try:
             engine = self._build()
             inferred_before = set(self.engine.triples(Origin.INFERRED))
-            delta = engine.load(sorted(self.engine.triples(Origin.ASSERTED), key=_canonical))
+            delta = engine.load(sorted(self.engine.triples(Origin.ASSERTED), key=triple_to_nt))
         except RuleError as exc:
             self.log.error("rules not reloaded, the previous rules stay in force: %s", exc)
             return
         self.engine = engine
+        refreeze()  # the old engine is garbage now, out of the frozen generation
         self.log.info("rules reloaded: %d rules", len(engine.rules))
         if self.roster is None or self.roster.answers(None):
             self._write(delta, None, inferred_before=inferred_before)
-
-
-def _canonical(triple: Triple) -> tuple[str, str, str]:
-    return (triple[0].n3(), triple[1].n3(), triple[2].n3())
 
 
 def _mtime(path: Path) -> float:

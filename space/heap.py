@@ -20,3 +20,13 @@ def freeze_startup() -> None:
     """
     gc.collect()
     gc.freeze()
+
+
+def refreeze() -> None:
+    """Freeze again after replacing long-lived state (a rules reload, a copied space).
+
+    Frozen objects are never collected: the ones the replaced state leaves in
+    reference cycles are unfrozen first, so this collection frees them.
+    """
+    gc.unfreeze()
+    freeze_startup()

@@ -13,6 +13,7 @@ when the leader's liveliness token goes away.
 
 from __future__ import annotations
 
+import gc
 import logging
 import queue
 import threading
@@ -351,6 +352,7 @@ class StoreServer:
     def _forget(self, name: str) -> None:
         """Drop a space's state from memory (its database was replaced: `_space` reloads it)."""
         self._spaces.pop(name, None)
+        gc.unfreeze()  # frozen at start (space.heap), the old state could never be freed
 
     def _reject(self, req: _Request, exc: Exception) -> None:
         what = "rejected" if isinstance(exc, QueryError) else "malformed, skipped:"
