@@ -135,7 +135,8 @@ class Crew(Agent):
         A change about no robot (a firing record, a place) waits for the
         periodic tick: the members read it from the shared view then.
         """
-        touched = {self._robot_of(s) for s, _p, _o in (*change.added, *change.removed)}
+        subjects = {s for s, _p, _o in (*change.added, *change.removed)}
+        touched = {self._robot_of(s) for s in subjects}
         touched.discard(None)
         for member in self.members:
             if member.robot in touched:

@@ -252,8 +252,7 @@ class TripleSpace:
 
     def snapshot(self, template: TemplateLike = None, *, timeout: float = 5.0) -> tuple[Graph, int]:
         """Return the matching state (both graphs) and the sequence number it reflects."""
-        t = self._template(template)
-        reply = self._ask({"op": "snapshot", "template": t.to_wire()}, timeout)
+        reply = self._snapshot(self._template(template), timeout)
         return self._graph(reply), int(reply.get("seq") or 0)
 
     def graphs(
@@ -264,11 +263,13 @@ class TripleSpace:
         Also returns the sequence number that read reflects: a subscriber that
         subscribed first knows which of the changes it receives the read holds.
         """
-        t = self._template(template)
-        reply = self._ask({"op": "snapshot", "template": t.to_wire()}, timeout)
+        reply = self._snapshot(self._template(template), timeout)
         asserted = [triple_from_nt(x) for x in reply.get(keys.ASSERTED) or ()]
         inferred = [triple_from_nt(x) for x in reply.get(keys.INFERRED) or ()]
         return asserted, inferred, int(reply.get("seq") or 0)
+
+    def _snapshot(self, template: Template, timeout: float) -> dict:
+        return self._ask({"op": "snapshot", "template": template.to_wire()}, timeout)
 
     def load_prefixes(self, *, timeout: float = 5.0) -> PrefixMap:
         """Learn the prefixes registered in the space (for templates and display); return them."""
@@ -340,8 +341,9 @@ class TripleSpace:
         self._subscriptions.add(sub)
         try:
             if snapshot:
-                graph, seq = self.snapshot(t, timeout=timeout)
-                state = [x for x in graph if not sub.skips(x)]
+                reply = self._snapshot(t, timeout)
+                seq = int(reply.get("seq") or 0)
+                state = [x for x in dict.fromkeys(_triples(reply)) if not sub.skips(x)]
                 initial = Change(
                     agent="",
                     seq=seq,
