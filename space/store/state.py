@@ -42,7 +42,7 @@ class SpaceState:
         """Fill the state from database rows `(g, s, p, o, ts)`."""
         for g, s, p, o, ts in rows:
             triple = (from_nt(s), from_nt(p), from_nt(o))
-            self.stores[g].update(added=[triple])
+            self.stores[g].put(triple)
             if ts:
                 self._stamps[(triple[0], triple[1])] = ts
         self._functional = self._functional_properties()
