@@ -97,9 +97,10 @@ def test_the_battery_scenario_completes(tmp_path):
 
 
 # Each agent is killed after the step that leaves it work to do: the reasoner before the
-# battery is very low, the nav monitor on the way to the dock, the behaviour machine and the
-# hw_monitor at the dock (the charge, and going back to the patient, must survive).
-KILLED_AFTER_STEP = {"reasoner": 1, "nav_monitor": 3, "behavior": 6, "hw_monitor": 7}
+# battery is very low, the HMI while it drains, the nav monitor on the way to the dock, the
+# behaviour machine and the hw_monitor at the dock (the charge, and going back to the
+# patient, must survive).
+KILLED_AFTER_STEP = {"reasoner": 1, "hmi": 2, "nav_monitor": 3, "behavior": 6, "hw_monitor": 7}
 
 
 @needs_reasoner
