@@ -30,6 +30,8 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from _fleet import REPO, RULES, Fleet, Observer, describe, reasoner_argv, rss_mb, stop_process
@@ -47,9 +49,15 @@ SIZES = (1, 10, 25, 50)
 WARMUP_CYCLES = 2
 
 
-def update_latency(count: int, samples: int, log: Path) -> list[float]:
-    """Return the seconds from a battery change to the reasoner's answer, one at a time."""
-    space = f"fleet{count}"
+@contextmanager
+def fleet_with_reasoner(
+    space: str, count: int, log: Path
+) -> Iterator[tuple[Observer, Fleet, subprocess.Popen]]:
+    """Serve a space of `count` robots with a reasoner process that has answered its load.
+
+    Yields the observer of what the store publishes, the fleet's sensors and the
+    reasoner; the reasoner, the observer and the server are stopped on exit.
+    """
     with serve() as endpoint, TripleSpace.open(endpoint, space=space, agent="fleet") as ts:
         obs = Observer(ts.session, space)
         site = describe(ts, count)
@@ -57,59 +65,51 @@ def update_latency(count: int, samples: int, log: Path) -> list[float]:
             reasoner = subprocess.Popen(reasoner_argv(endpoint, space), cwd=REPO, stderr=out)
         try:
             obs.wait_answer()
-            fleet = Fleet(ts, site, count)
-            latencies = []
-            warmup = WARMUP_CYCLES * 2 * count
-            for i in range(warmup + samples):
-                cid = fleet.battery(i % count)
-                if not obs.wait(lambda: cid in obs.answered, 10):  # noqa: B023
-                    raise TimeoutError(f"no answer to battery change {i} of {count} robots")
-                if i >= warmup:
-                    latencies.append(obs.answered[cid] - fleet.sent[cid])
-            return latencies
+            yield obs, Fleet(ts, site, count), reasoner
         finally:
             stop_process(reasoner)
             obs.close()
+
+
+def update_latency(count: int, samples: int, log: Path) -> list[float]:
+    """Return the seconds from a battery change to the reasoner's answer, one at a time."""
+    with fleet_with_reasoner(f"fleet{count}", count, log) as (obs, fleet, _reasoner):
+        latencies = []
+        warmup = WARMUP_CYCLES * 2 * count
+        for i in range(warmup + samples):
+            cid = fleet.battery(i % count)
+            if not obs.wait(lambda: cid in obs.answered, 10):  # noqa: B023
+                raise TimeoutError(f"no answer to battery change {i} of {count} robots")
+            if i >= warmup:
+                latencies.append(obs.answered[cid] - fleet.sent[cid])
+        return latencies
 
 
 def sustained(seconds: float, robots: int, hz: float, log: Path) -> dict:
     """Run the fleet at full rate for `seconds`; return rate, losses, latencies, RSS."""
-    space = "sustained"
-    with serve() as endpoint, TripleSpace.open(endpoint, space=space, agent="fleet") as ts:
-        obs = Observer(ts.session, space)
-        site = describe(ts, robots)
-        with open(log, "ab") as out:
-            reasoner = subprocess.Popen(reasoner_argv(endpoint, space), cwd=REPO, stderr=out)
+    with fleet_with_reasoner("sustained", robots, log) as (obs, fleet, reasoner):
+        rss: list[tuple[float, float]] = []  # (seconds into the run, MB)
+        done = threading.Event()
+        start = time.monotonic()
+
+        def sample() -> None:
+            while True:
+                rss.append((time.monotonic() - start, rss_mb(reasoner.pid)))
+                if done.wait(1.0):
+                    return
+
+        sampler = threading.Thread(target=sample)
+        sampler.start()
         try:
-            obs.wait_answer()
-            fleet = Fleet(ts, site, robots)
-            rss: list[tuple[float, float]] = []  # (seconds into the run, MB)
-            done = threading.Event()
-            start = time.monotonic()
-
-            def sample() -> None:
-                while True:
-                    rss.append((time.monotonic() - start, rss_mb(reasoner.pid)))
-                    if done.wait(1.0):
-                        return
-
-            sampler = threading.Thread(target=sample)
-            sampler.start()
-            try:
-                rate = fleet.play(seconds, robots * hz)
-                sent, markers = fleet.sent, fleet.markers
-                obs.wait(
-                    lambda: (
-                        sent.keys() <= obs.arrived.keys() and markers.keys() <= obs.answered.keys()
-                    ),
-                    30,
-                )
-            finally:
-                done.set()
-                sampler.join()
+            rate = fleet.play(seconds, robots * hz)
+            sent, markers = fleet.sent, fleet.markers
+            obs.wait(
+                lambda: sent.keys() <= obs.arrived.keys() and markers.keys() <= obs.answered.keys(),
+                30,
+            )
         finally:
-            stop_process(reasoner)
-            obs.close()
+            done.set()
+            sampler.join()
     answers = sorted((t, obs.answered[c] - t) for c, t in markers.items() if c in obs.answered)
     applied = [obs.arrived[c] - t for c, t in sent.items() if c in obs.arrived]
     seqs = sorted(obs.at_seq)

@@ -10,9 +10,10 @@ from pathlib import Path
 import pytest
 from rdflib import Graph, Literal, Namespace
 from rdflib.term import Node
+from rulestate import RuledState
 
 from agents.sim.fleet import clone_robot, fleet_description
-from space.reasoning import RuleEngine, read_graph
+from space.reasoning import read_graph
 
 REPO = Path(__file__).resolve().parents[1]
 ROBOTS = REPO / "ontology" / "robots"
@@ -21,30 +22,14 @@ WAITING = Literal("All docks are taken: I am waiting for one to be free.")
 INTERACTION = ("screen", "speakers", "microphone")
 
 
-class Fleet:
-    """The engine with the fleet rules; `set` replaces a single-valued state as agents do."""
+class Fleet(RuledState):
+    """The engine with the fleet rules (`set`, `get`, `fired`: see `RuledState`)."""
 
     def __init__(self, *extra: Graph, files: tuple[str, ...] = ("hospital_fleet.ttl",)) -> None:
-        self.engine = RuleEngine.from_files(
-            rules=[REPO / "rules" / "fleet.rules"],
-            ontology=[REPO / "ontology" / "selfconfig.ttl"],
-        )
         data = read_graph([ROBOTS / "common.ttl", *(ROBOTS / f for f in files)])
         for graph in extra:
             data += graph
-        self.engine.load(data)
-        self.fired: list[str] = []
-
-    def set(self, subject: Node, predicate: Node, value: Node | None) -> None:
-        old = [(subject, predicate, o) for o in self.engine.graph.objects(subject, predicate)]
-        added = [] if value is None else [(subject, predicate, value)]
-        delta = self.engine.apply(added=added, removed=[t for t in old if t not in added])
-        self.fired += [f.rule for f in delta.firings]
-
-    def get(self, subject: Node, predicate: Node) -> Node | None:
-        values = sorted(self.engine.graph.objects(subject, predicate))
-        assert len(values) <= 1, f"{predicate} of {subject} has several values: {values}"
-        return values[0] if values else None
+        super().__init__("fleet.rules", data)
 
     def battery(self, robot: str, level: str) -> None:
         self.set(AC[f"{robot}_battery"], AC.battery_level, Literal(level))

@@ -9,34 +9,21 @@ from pathlib import Path
 import pytest
 from rdflib import RDF, Literal, Namespace
 from rdflib.term import Node
+from rulestate import RuledState
 
-from space.reasoning import RuleEngine, read_graph
+from space.reasoning import read_graph
 
 REPO = Path(__file__).resolve().parents[1]
 AC = Namespace("https://w3id.org/tspace/selfconfig#")
 
 
-class Robot:
-    """The engine loaded with ac:robot1; `set` replaces a single-valued state as agents do."""
+class Robot(RuledState):
+    """The engine loaded with ac:robot1 (`set`, `get`, `fired`: see `RuledState`)."""
 
     def __init__(self) -> None:
-        self.engine = RuleEngine.from_files(
-            rules=[REPO / "rules" / "selfconfig.rules"],
-            ontology=[REPO / "ontology" / "selfconfig.ttl"],
+        super().__init__(
+            "selfconfig.rules", read_graph([REPO / "ontology" / "robots" / "hospital.ttl"])
         )
-        self.engine.load(read_graph([REPO / "ontology" / "robots" / "hospital.ttl"]))
-        self.fired: list[str] = []
-
-    def set(self, subject: Node, predicate: Node, value: Node | None) -> None:
-        old = [(subject, predicate, o) for o in self.engine.graph.objects(subject, predicate)]
-        added = [] if value is None else [(subject, predicate, value)]
-        delta = self.engine.apply(added=added, removed=[t for t in old if t not in added])
-        self.fired += [f.rule for f in delta.firings]
-
-    def get(self, subject: Node, predicate: Node) -> Node | None:
-        values = sorted(self.engine.graph.objects(subject, predicate))
-        assert len(values) <= 1, f"{predicate} of {subject} has several values: {values}"
-        return values[0] if values else None
 
 
 @pytest.fixture
