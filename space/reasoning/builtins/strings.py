@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from functools import lru_cache
 
 from rdflib import Literal, URIRef
@@ -23,36 +24,34 @@ def _bind_last(ctx: Context, args: Args, result: Node) -> Args | None:
     return args if args[-1] == out else None
 
 
-class StrConcat(Builtin):
+class _Concat(Builtin):
+    """Bind the last argument to `make` of the lexical forms of the others, joined."""
+
+    arity = (1, None)
+    make: Callable[[str], Node]
+
+    def outputs(self, nargs: int) -> frozenset[int]:
+        return frozenset({nargs - 1})
+
+    def run(self, ctx: Context, args: Args) -> Args | None:
+        parts = [_lexical(ctx, i) for i in args[:-1]]
+        if None in parts:
+            return None
+        return _bind_last(ctx, args, type(self).make("".join(parts)))  # type: ignore[arg-type]
+
+
+class StrConcat(_Concat):
     """Bind the last argument to a plain literal joining the lexical forms of the others."""
 
     name = "strConcat"
-    arity = (1, None)
-
-    def outputs(self, nargs: int) -> frozenset[int]:
-        return frozenset({nargs - 1})
-
-    def run(self, ctx: Context, args: Args) -> Args | None:
-        parts = [_lexical(ctx, i) for i in args[:-1]]
-        if None in parts:
-            return None
-        return _bind_last(ctx, args, Literal("".join(parts)))  # type: ignore[arg-type]
+    make = Literal
 
 
-class UriConcat(Builtin):
+class UriConcat(_Concat):
     """Bind the last argument to the IRI joining the lexical forms of the others."""
 
     name = "uriConcat"
-    arity = (1, None)
-
-    def outputs(self, nargs: int) -> frozenset[int]:
-        return frozenset({nargs - 1})
-
-    def run(self, ctx: Context, args: Args) -> Args | None:
-        parts = [_lexical(ctx, i) for i in args[:-1]]
-        if None in parts:
-            return None
-        return _bind_last(ctx, args, URIRef("".join(parts)))  # type: ignore[arg-type]
+    make = URIRef
 
 
 @lru_cache(maxsize=256)
