@@ -30,16 +30,23 @@ def free_port() -> int:
 
 
 def wait_for(
-    condition: Callable[[], object], timeout: float = 10.0, what: str = "condition"
+    condition: Callable[[], object],
+    timeout: float = 10.0,
+    what: str = "condition",
+    explain: Callable[[], str] | None = None,
 ) -> object:
-    """Poll `condition` until it returns a truthy value; fail the test after `timeout`."""
+    """Poll `condition` until it returns a truthy value; fail the test after `timeout`.
+
+    `explain`, if given, is called on failure and its text (logs, say) added to the message.
+    """
     deadline = time.monotonic() + timeout
     while True:
         value = condition()
         if value:
             return value
         if time.monotonic() > deadline:
-            pytest.fail(f"timed out after {timeout} s waiting for {what}")
+            detail = f"\n{explain()}" if explain is not None else ""
+            pytest.fail(f"timed out after {timeout} s waiting for {what}{detail}")
         time.sleep(0.02)
 
 
