@@ -68,6 +68,9 @@ def test_a_killed_agent_is_restarted_and_the_supervisor_says_so(tmp_path, launch
         up.wait_started()
         first = wait_for(lambda: up.pid_of("agents.hw_monitor"), 10, "hw_monitor")
         wait_for(lambda: hmi_connected(up.hmi_port), 20, "the HMI page")
+        # Killed only once connected, so that its restart is the second connection.
+        log = up.data / "logs" / "hw_monitor.log"
+        wait_for(lambda: "connected to space 'ward'" in log.read_text(), 20, "hw_monitor", up.logs)
         subprocess.run(["kill", "-9", str(first)], check=True)
         wait_for(
             lambda: up.stderr_has("hw_monitor: crashed (killed by SIGKILL); restarting in 0.5 s"),
@@ -78,9 +81,8 @@ def test_a_killed_agent_is_restarted_and_the_supervisor_says_so(tmp_path, launch
         second = wait_for(lambda: up.pid_of("agents.hw_monitor"), 10, "the new hw_monitor")
         assert second != first
         # The new monitor connects and goes on reporting the robot's devices.
-        log = up.data / "logs" / "hw_monitor.log"
         wait_for(
-            lambda: log.read_text().count("connected to space 'ward'") >= 2,
+            lambda: log.read_text().count("connected to space 'ward'") == 2,
             20,
             "the new hw_monitor to connect",
             up.logs,
