@@ -150,6 +150,9 @@ def deployment(tmp_path):
     launch.write_text(LAUNCH.format(repo=REPO))
     with Up(tmp_path, launch) as up:
         up.wait_started()
+        # A battery set from the page before the reasoner listens is reasoned at its load,
+        # with no change to name as the cause.
+        up.wait_connected("reasoner", "hw_monitor", "nav_monitor", "behavior", "hmi")
         yield up
 
 

@@ -122,3 +122,14 @@ class Up:
             "tspace up to start its agents",
         )
         assert self.proc is not None and self.proc.poll() is None, self.logs()
+
+    def wait_connected(self, *agents: str, timeout: float = 30.0) -> None:
+        """Wait until each named agent's log says it connected to the space."""
+        for agent in agents:
+            log = self.data / "logs" / f"{agent}.log"
+            wait_for(
+                lambda log=log: log.exists() and "connected to space" in log.read_text(),
+                timeout,
+                f"{agent} to connect",
+                self.logs,
+            )
