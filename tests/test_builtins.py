@@ -41,6 +41,17 @@ def test_equal_and_not_equal_compare_by_value():
     }
 
 
+def test_a_simple_literal_is_an_xsd_string():
+    typed = Literal("low", datatype=URIRef(XSD_NS + "string"))
+    data = [(EX.a, EX.v, typed), (EX.b, EX.v, Literal("low")), (EX.c, EX.v, Literal("high"))]
+    same = "[r: (?x ex:v ?a), (?y ex:v ?b), equal(?a, ?b), notEqual(?x, ?y) -> (ex:r ex:out ?x)]"
+    assert derive(same, data) == {EX.a, EX.b}
+    assert derive("[r: (?x ex:v ?a), notEqual(?a, 'low') -> (ex:r ex:out ?x)]", data) == {EX.c}
+    assert derive("[r: (?x ex:v 'low') -> (ex:r ex:out ?x)]", [data[0]]) == {EX.a}
+    missing = "[r: (?x ex:v ?a), noValue(?x, ex:v, 'low'^^xsd:string) -> (ex:r ex:out ?x)]"
+    assert derive(missing, data) == {EX.c}
+
+
 @pytest.mark.parametrize(
     ("name", "expected"),
     [("lessThan", {EX.c}), ("greaterThan", {EX.a, EX.b}), ("le", {EX.c}), ("ge", {EX.a, EX.b})],
@@ -64,7 +75,7 @@ def test_orderings_on_date_times():
         ("sum(?a, ?b, ?c)", Literal(9)),
         ("difference(?a, ?b, ?c)", Literal(3)),
         ("product(?a, ?b, ?c)", Literal(18)),
-        ("quotient(?a, ?b, ?c)", Literal(2.0)),
+        ("quotient(?a, ?b, ?c)", Literal(2)),
         ("min(?a, ?b, ?c)", Literal(3)),
         ("max(?a, ?b, ?c)", Literal(6)),
     ],
@@ -73,6 +84,21 @@ def test_arithmetic_binds_its_last_argument(call, result):
     data = [(EX.x, EX.a, Literal(6)), (EX.x, EX.b, Literal(3))]
     rule = f"[r: (?x ex:a ?a), (?x ex:b ?b), {call} -> (?x ex:out ?c)]"
     assert derive(rule, data) == {result}
+
+
+@pytest.mark.parametrize(
+    ("a", "b", "result"),
+    [
+        ("7", "2", Literal(3)),
+        ("-7", "2", Literal(-3)),
+        ("7", "-2", Literal(-3)),
+        ("7.0e0", "2", Literal(3.5)),
+        ("7", "2.0", Literal(3.5)),
+    ],
+)
+def test_quotient_of_two_integers_is_truncated_as_in_jena(a, b, result):
+    rule = f"[r: (?x ex:p ?y), quotient({a}, {b}, ?c) -> (?x ex:out ?c)]"
+    assert derive(rule, [(EX.x, EX.p, EX.y)]) == {result}
 
 
 def test_arithmetic_checks_a_bound_result_and_add_one_counts():

@@ -1,7 +1,9 @@
 """Encode terms as small integers, so joins compare and hash ints instead of rdflib objects.
 
 Each term also gets a value key, computed once, that makes `1`, `1.0` and
-`"1"^^xsd:int` equal for the builtins that compare by value.
+`"1"^^xsd:int` equal for the builtins that compare by value. A literal typed
+xsd:string is the simple literal of the same text (RDF 1.1, and `space.terms` on
+the wire), so both get one id: they match, compare and `noValue` alike.
 """
 
 from __future__ import annotations
@@ -10,7 +12,7 @@ from dataclasses import dataclass
 from datetime import date, datetime, time
 from decimal import Decimal
 
-from rdflib import Literal
+from rdflib import XSD, Literal
 from rdflib.term import Node
 
 
@@ -23,6 +25,13 @@ class FunctorValue:
 
 
 Value = Node | FunctorValue
+
+
+def simple(term: Value) -> Value:
+    """Return the simple literal for a literal typed xsd:string, else the term itself."""
+    if isinstance(term, Literal) and term.datatype == XSD.string:
+        return Literal(str(term))
+    return term
 
 
 def value_key(term: Value) -> object:
@@ -57,6 +66,10 @@ class TermTable:
         found = self._ids.get(term)
         if found is not None:
             return found
+        plain = simple(term)
+        if plain is not term:
+            found = self._ids[term] = self.id(plain)
+            return found
         new = len(self._terms)
         self._ids[term] = new
         self._terms.append(term)
@@ -67,7 +80,8 @@ class TermTable:
 
     def find(self, term: Value) -> int | None:
         """Return the id of a term, or None if it was never seen."""
-        return self._ids.get(term)
+        found = self._ids.get(term)
+        return found if found is not None else self._ids.get(simple(term))
 
     def term(self, i: int) -> Value:
         """Return the term of an id."""

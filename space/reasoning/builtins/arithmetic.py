@@ -1,7 +1,9 @@
 """Compute with numbers: `sum difference product quotient min max addOne`.
 
 Each binds its last argument to the result, or checks it when already bound.
-Integers stay integers (except for `quotient`); anything else is computed as a float.
+Integers stay integers, as in Jena: `quotient` of two integers truncates toward
+zero (`quotient(7, 2)` is 3, `quotient(-7, 2)` is -3); anything else is computed
+as a float.
 """
 
 from __future__ import annotations
@@ -85,6 +87,14 @@ class Max(_Binary):
     function = max
 
 
+def _divide(a: Number, b: Number) -> Number:
+    """Divide as Jena does: two integers give an integer truncated toward zero."""
+    if isinstance(a, int) and isinstance(b, int):
+        whole = abs(a) // abs(b)
+        return whole if (a < 0) == (b < 0) else -whole
+    return a / b
+
+
 class Quotient(Builtin):
     """Bind the third argument to the first divided by the second (never by zero)."""
 
@@ -98,7 +108,7 @@ class Quotient(Builtin):
         a, b = _number(ctx, args[0]), _number(ctx, args[1])
         if a is None or not b:
             return None
-        return _bind(ctx, args, a / b)
+        return _bind(ctx, args, _divide(a, b))
 
 
 class AddOne(Builtin):
