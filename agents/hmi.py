@@ -27,7 +27,7 @@ from agents.sim.battery import middle_of
 from agents.view import AC
 from space import Change
 from space.mirror import ChangeRecord
-from space.robotview import read_firings, read_robots
+from space.robotview import BadValues, read_firings, read_robots
 
 TASK_TYPES = ("AttendingPatient", "Guiding", "GoingToDock", "Idle")
 
@@ -43,6 +43,7 @@ class Hmi(Agent):
         self.board = StateBoard()
         self.commands = Commands()
         self.records: deque[ChangeRecord] = deque(maxlen=200)
+        self.bad_values = BadValues(self.log.warning)
         self.server: HmiServer | None = None
         self._http: threading.Thread | None = None
 
@@ -106,7 +107,7 @@ class Hmi(Agent):
             {
                 "connected": True,
                 "space": self.args.space,
-                "robots": [asdict(r) for r in read_robots(graph)],
+                "robots": [asdict(r) for r in read_robots(graph, self.bad_values)],
                 "firings": [asdict(f) for f in read_firings(self.records)],
                 "tasks": [t for t in TASK_TYPES if self.view.task_of_type(t) is not None],
                 "people": self._named(AC.Person, AC.Patient),

@@ -21,8 +21,9 @@ from space.errors import SpaceError
 from space.launch import AgentSpec, Launch
 from space.liveview import Frame, LiveView, robot_line
 from space.mirror import SpaceMirror
-from space.robotview import read_firings, read_robots
+from space.robotview import BadValues, read_firings, read_robots
 from space.scenario import Scenario, ScenarioRun
+from space.session import check_can_listen
 from space.supervisor import ProcessSpec, Supervisor
 from space.turtle import read_turtle
 
@@ -74,6 +75,8 @@ class Deployment:
             backoff=launch.backoff,
         )
         self.mirror = SpaceMirror()
+        self.bad_values = BadValues(view.event)
+        self._view_failure = ""
         self.scenario: ScenarioRun | None = None
         self.robot = launch.robots[0] if launch.robots else "robot1"
 
@@ -100,7 +103,12 @@ class Deployment:
         """Start everything, show it until stopped, stop everything; return the exit code.
 
         Must be called from the main thread (it installs SIGINT and SIGTERM handlers).
+
+        Raises:
+            ConfigError, ListenFailed: the store's router could not listen on `listen`
+                (checked before anything starts, so the user reads why at once).
         """
+        check_can_listen(self.options.listen)
         previous = {
             sig: signal.signal(sig, self._on_signal) for sig in (signal.SIGINT, signal.SIGTERM)
         }
@@ -189,13 +197,13 @@ class Deployment:
             if self.scenario is not None:
                 status = self._tick_scenario(ts, self.scenario)
                 if status is not None:
-                    self.view.show(self._frame(), final=True)
+                    self._show(final=True)
                     return status
             # Reading the robots copies the graph: only when it changed, or to
             # refresh process states once a second.
             if self.mirror.version != shown or time.monotonic() - shown_at > 1.0:
                 shown, shown_at = self.mirror.version, time.monotonic()
-                self.view.show(self._frame())
+                self._show()
             self.stop_requested.wait(TICK)
         if options.once:
             print("tspace up: stopped before the scenario completed", file=sys.stderr)
@@ -214,7 +222,7 @@ class Deployment:
             print(f"scenario {run.scenario.name}: completed", flush=True)
             return 0
         if run.failure is not None:
-            robots = read_robots(self.mirror.graph())
+            robots = read_robots(self.mirror.graph(), self.bad_values)
             state = "; ".join(robot_line(r) for r in robots) or "no robot in the space"
             print(
                 f"tspace up: scenario {run.scenario.name} failed: {run.failure} (now: {state})",
@@ -222,6 +230,15 @@ class Deployment:
             )
             return 1
         return None
+
+    def _show(self, final: bool = False) -> None:
+        """Draw the view; a drawing that fails is reported once, and the processes run on."""
+        try:
+            self.view.show(self._frame(), final=final)
+        except Exception as exc:  # the supervisor's loop must outlive any picture of the space
+            if repr(exc) != self._view_failure:
+                self._view_failure = repr(exc)
+                self.view.event(f"cannot show the space: {exc!r}")
 
     def _frame(self) -> Frame:
         listen = ", ".join(self.options.listen)
@@ -231,7 +248,7 @@ class Deployment:
             header += f", HMI {url}"
         return Frame(
             header=header,
-            robots=read_robots(self.mirror.graph()),
+            robots=read_robots(self.mirror.graph(), self.bad_values),
             firings=read_firings(self.mirror.recent()),
             processes=self.supervisor.status(),
             footer=self.scenario.progress if self.scenario else "Ctrl-C stops everything.",

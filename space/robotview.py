@@ -7,16 +7,19 @@ One reading of the vocabulary (docs/vocabulary.md) shared by the live view of
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+import math
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
-from rdflib import RDF, Graph, Literal, Namespace, URIRef
+from rdflib import RDF, BNode, Graph, Literal, Namespace, URIRef
 from rdflib.term import Node
 
 from space.mirror import ChangeRecord
+from space.prefixes import PrefixMap
 from space.terms import Triple
 
 AC = Namespace("https://w3id.org/tspace/selfconfig#")
+PREFIXES = PrefixMap({"ac": str(AC)})
 
 # Most specific first: a device is shown with the first of its classes listed here.
 DEVICE_CLASSES = (
@@ -90,12 +93,30 @@ class Firing:
     cause: tuple[str, ...]
 
 
+class BadValues:
+    """Report each value a view cannot show, once: views re-read every robot on each change.
+
+    Args:
+        report: called with one line per bad value (a logger's `warning`, say).
+    """
+
+    def __init__(self, report: Callable[[str], None]) -> None:
+        self._report = report
+        self._seen: set[Triple] = set()
+
+    def __call__(self, triple: Triple, expected: str) -> None:
+        """Report `triple` unless it was already; `expected` says what the value should be."""
+        if triple not in self._seen:
+            self._seen.add(triple)
+            s, p, o = triple
+            self._report(f"{short(s)} {short(p)} {str(o)!r} is not {expected}; shown as unknown")
+
+
 def short(term: Node) -> str:
-    """Return a term as a person reads it: `ac:` local names, bare literal values."""
+    """Return a term as a person reads it: prefixed names (`ac:`, `rdf:`...), bare literals."""
     if isinstance(term, Literal):
         return str(term)
-    text = str(term)
-    return "ac:" + text[len(str(AC)) :] if text.startswith(str(AC)) else text
+    return PREFIXES.compact(str(term)) or str(term)
 
 
 def local(term: Node | None) -> str | None:
@@ -119,13 +140,35 @@ def _kind(graph: Graph, device: Node) -> str:
     return local(found) or "Device"
 
 
+def _percent(
+    graph: Graph, device: Node | None, predicate: Node, bad: BadValues | None
+) -> int | None:
+    """Return a whole percentage, None if absent or not a number (reported to `bad`)."""
+    value = graph.value(device, predicate) if device is not None else None
+    if value is None:
+        return None
+    try:
+        number = float(value) if isinstance(value, Literal) else math.nan
+    except ValueError:
+        number = math.nan
+    if not math.isfinite(number):
+        if bad is not None:
+            bad((device, predicate, value), "a percentage")
+        return None
+    return int(number)
+
+
 def _robot_names(graph: Graph) -> list[Node]:
     robots = set(graph.subjects(RDF.type, AC.Robot)) | set(graph.subjects(AC.has_device, None))
     return sorted(robots)
 
 
-def read_robots(graph: Graph) -> list[RobotState]:
-    """Return the state of every robot in `graph`, sorted by name."""
+def read_robots(graph: Graph, bad: BadValues | None = None) -> list[RobotState]:
+    """Return the state of every robot in `graph`, sorted by name.
+
+    Anything may be written into a space: a value that cannot be shown (a charge
+    of "abc") is shown as unknown and passed to `bad`, never raised.
+    """
     states = []
     for robot in _robot_names(graph):
         devices = sorted(graph.objects(robot, AC.has_device))
@@ -135,7 +178,6 @@ def read_robots(graph: Graph) -> list[RobotState]:
         task = graph.value(robot, AC.current_task)
         requested = graph.value(robot, AC.requested_task)
         place = graph.value(robot, AC.location)
-        charge = graph.value(battery, AC.charge_percent) if battery else None
         states.append(
             RobotState(
                 name=local(robot) or str(robot),
@@ -146,7 +188,7 @@ def read_robots(graph: Graph) -> list[RobotState]:
                 at_dock=place is not None
                 and (place == graph.value(robot, AC.dock) or (place, RDF.type, AC.Dock) in graph),
                 battery=local(graph.value(battery, AC.battery_level)) if battery else None,
-                charge=int(charge.toPython()) if isinstance(charge, Literal) else None,
+                charge=_percent(graph, battery, AC.charge_percent, bad),
                 speed=local(graph.value(base, AC.motion_speed)) if base else None,
                 devices=tuple(
                     DeviceState(
@@ -160,10 +202,17 @@ def read_robots(graph: Graph) -> list[RobotState]:
     return states
 
 
-def _bookkeeping(triple: Triple) -> bool:
-    """Return True for the triples of an `ac:RuleFiring` record."""
+def _noise(triple: Triple) -> bool:
+    """Return True for triples a firing line leaves out.
+
+    The reasoner's bookkeeping (who fired, when) is shown as rule names, and what
+    involves a blank node (membership of an OWL restriction, say) means nothing
+    to a reader.
+    """
     _, p, o = triple
-    return p in FIRING_PROPERTIES or (p == RDF.type and o == AC.RuleFiring)
+    if p in FIRING_PROPERTIES or (p == RDF.type and o == AC.RuleFiring):
+        return True
+    return any(isinstance(t, BNode) for t in triple)
 
 
 def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firing]:
@@ -176,7 +225,6 @@ def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firin
             continue
         cause = by_id.get(record.cause)
         stamp = record.timestamp.strftime("%H:%M:%S.%f")[:-3] if record.timestamp else ""
-        # The reasoner's bookkeeping (who fired, when) is shown as rule names, not triples.
         names = sorted({str(o) for _, p, o in record.added if p == AC.rule_name})
         firings.append(
             Firing(
@@ -184,10 +232,10 @@ def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firin
                 agent=record.agent,
                 time=stamp,
                 rules=tuple(names),
-                added=tuple(describe(t) for t in record.added if not _bookkeeping(t)),
-                removed=tuple(describe(t) for t in record.removed if not _bookkeeping(t)),
+                added=tuple(describe(t) for t in record.added if not _noise(t)),
+                removed=tuple(describe(t) for t in record.removed if not _noise(t)),
                 cause_agent=cause.agent if cause else None,
-                cause=tuple(describe(t) for t in cause.added) if cause else (),
+                cause=tuple(describe(t) for t in cause.added if not _noise(t)) if cause else (),
             )
         )
         if len(firings) == limit:
