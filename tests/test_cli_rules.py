@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rdflib import Graph, Literal, Namespace
+from rdflib import Graph, Literal, Namespace, URIRef
 
 from space.cli import main
 
@@ -55,4 +55,35 @@ def test_reason_reports_a_broken_rules_file(tmp_path, capsys):
     data = tmp_path / "d.ttl"
     data.write_text("")
     assert main(["reason", "--rules", str(bad), "--data", str(data)]) == 1
-    assert "in rule 'r': drop(4): the body has items 0..0" in capsys.readouterr().err
+    assert "in rule 'r': drop(4): the body has only item 0" in capsys.readouterr().err
+
+
+def test_rules_check_counts_one_rule_in_the_singular(tmp_path, capsys):
+    one = tmp_path / "one.rules"
+    one.write_text("[only: (?a ?b ?c) -> (?a ?b ?c)]\n")
+    assert main(["rules", "check", str(one)]) == 0
+    assert f"{one}: 1 rule\n" in capsys.readouterr().out
+
+
+def test_rules_check_names_a_missing_file_as_given(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["rules", "check", "nofile.rules"]) == 1
+    assert capsys.readouterr().err == "nofile.rules: no such file\n"
+
+
+def test_reason_names_a_missing_data_file_as_given(tmp_path, monkeypatch, capsys):
+    (tmp_path / "work").mkdir()
+    monkeypatch.chdir(tmp_path / "work")
+    rules = str(ROOT / "rules" / "paper.rules")
+    assert main(["reason", "--rules", rules, "--data", "../nofile.ttl"]) == 1
+    assert capsys.readouterr().err == "tspace reason: ../nofile.ttl: no such file\n"
+
+
+def test_reason_reads_relative_iris_against_the_data_file(tmp_path, monkeypatch, capsys):
+    (tmp_path / "data.ttl").write_text("<a> <p> <b> .\n")
+    monkeypatch.chdir(tmp_path)
+    rules = str(ROOT / "rules" / "paper.rules")
+    assert main(["reason", "--rules", rules, "--data", "data.ttl"]) == 0
+    state = Graph().parse(data=capsys.readouterr().out, format="turtle")
+    base = tmp_path.as_uri()
+    assert (URIRef(f"{base}/a"), URIRef(f"{base}/p"), URIRef(f"{base}/b")) in state

@@ -7,7 +7,14 @@ from pathlib import Path
 import pytest
 from rdflib import Literal, Namespace, URIRef
 
-from space.reasoning import RuleError, RuleSyntaxError, default_registry, load_rules, parse_rules
+from space.reasoning import (
+    RuleEngine,
+    RuleError,
+    RuleSyntaxError,
+    default_registry,
+    load_rules,
+    parse_rules,
+)
 from space.reasoning.rules import Call, Functor, Pattern, Var
 
 DATA = Path(__file__).parent / "data" / "rules"
@@ -70,8 +77,12 @@ def test_include_resolves_relative_to_the_including_file_and_shares_prefixes():
 def test_include_cycle_and_missing_file_are_errors():
     with pytest.raises(RuleSyntaxError, match="include cycle"):
         load_rules([DATA / "cycle_a.rules"], REG)
-    with pytest.raises(RuleSyntaxError, match=r"t.rules:1:1: cannot read"):
+    with pytest.raises(
+        RuleSyntaxError, match=r"^t.rules:1:1: cannot include nowhere.rules: no such file$"
+    ):
         parse("@include <nowhere.rules>.")
+    with pytest.raises(RuleSyntaxError, match=r"^nowhere.rules: no such file$"):
+        load_rules(["nowhere.rules"], REG)
 
 
 @pytest.mark.parametrize(
@@ -83,8 +94,16 @@ def test_include_cycle_and_missing_file_are_errors():
             "t.rules:1:17: in rule 'r1': notEqual() takes 2 arguments, got 1",
         ),
         (
+            "[r1: (?a ?b ?c) isLiteral(?a, ?b) -> ]",
+            "t.rules:1:17: in rule 'r1': isLiteral() takes 1 argument, got 2",
+        ),
+        (
             "[r1: (?a ?b ?c) -> drop(3)]",
-            "t.rules:1:20: in rule 'r1': drop(3): the body has items 0..0",
+            "t.rules:1:20: in rule 'r1': drop(3): the body has only item 0",
+        ),
+        (
+            "[r1: (?a ?b ?c) (?c ?b ?a) -> drop(2)]",
+            "t.rules:1:31: in rule 'r1': drop(2): the body has items 0..1",
         ),
         (
             "[r1: (?a ?b ?c) notEqual(?a, 1) -> drop(1)]",
@@ -116,3 +135,56 @@ def test_syntax_error_says_where_and_in_which_rule():
 def test_unterminated_rule_is_a_syntax_error_at_the_end():
     with pytest.raises(RuleSyntaxError, match=r"t.rules:1:\d+: in rule 'r9': syntax error"):
         parse("[r9: (?a ?b ?c) -> (?a ?b 'x")
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (
+            "[r1: (?a ?b ?c) -> (?a ?b ?c)\n\n[r2: (?a ?b ?c) -> (?a ?b ?c)]\n",
+            "t.rules:4:1: syntax error: unexpected end of file:"
+            " expected ']' to close rule 'r1' opened at line 1",
+        ),
+        (
+            "[ok: (?a ?b ?c) -> (?a ?b ?c)]\n[(?a ?b ?c) -> (?a ?b ?c)",
+            "t.rules:2:26: syntax error: unexpected end of file:"
+            " expected ']' to close the rule opened at line 2",
+        ),
+        (
+            "[r1: (?a ?b ?c) -> (?a ?b",
+            "t.rules:1:26: in rule 'r1': syntax error: unexpected end of file:"
+            " expected ')' to close the '(' opened at line 1",
+        ),
+        ("@prefix ex: <http://example.org/>", "t.rules:1:34: syntax error: unexpected end of file"),
+    ],
+)
+def test_an_early_end_of_file_says_so_and_what_is_left_open(text, message):
+    with pytest.raises(RuleSyntaxError) as caught:
+        parse(text)
+    assert str(caught.value) == message
+
+
+def test_a_rule_name_is_used_once_in_a_rule_set(tmp_path):
+    with pytest.raises(RuleError) as caught:
+        parse("[r1: (?a ?b ?c) -> (?a ?b ?c)]\n\n  [r1: (?a ?b ?c) -> (?c ?b ?a)]")
+    assert str(caught.value) == (
+        "t.rules:3:3: in rule 'r1': duplicate rule name, first used at t.rules:1:1"
+    )
+    (tmp_path / "inner.rules").write_text("[r1: (?a ?b ?c) -> (?a ?b ?c)]\n")
+    outer = tmp_path / "outer.rules"
+    outer.write_text("@include <inner.rules>.\n[r1: (?a ?b ?c) -> (?c ?b ?a)]\n")
+    with pytest.raises(
+        RuleError,
+        match=r"outer.rules:2:1: in rule 'r1': duplicate rule name, "
+        r"first used at .*inner.rules:1:1$",
+    ):
+        load_rules([outer], REG)
+    with pytest.raises(RuleError, match=r"inner.rules is read twice"):
+        load_rules([tmp_path / "inner.rules", tmp_path / "inner.rules"], REG)
+    rules = parse("[r1: (?a ?b ?c) -> (?a ?b ?c)]")
+    with pytest.raises(RuleError, match=r"duplicate rule name"):
+        RuleEngine([*rules, *rules], owl=False)
+    assert [r.name for r in parse("[(?a ?b ?c) -> (?a ?b ?c)] [(?a ?b ?c) -> (?c ?b ?a)]")] == [
+        None,
+        None,
+    ]

@@ -36,7 +36,7 @@ def run_check(args: argparse.Namespace) -> int:
             print(exc, file=sys.stderr)
             failed += 1
             continue
-        print(f"{path}: {len(rules)} rules")
+        print(f"{path}: {len(rules)} rule{'' if len(rules) == 1 else 's'}")
         for rule in rules:
             calls = [i for i in (*rule.body, *rule.head) if isinstance(i, Call)]
             kind = "production" if any(not c.builtin.monotonic for c in calls) else "monotonic"

@@ -58,8 +58,9 @@ class Agenda:
             window = Counter(self._recent)
             names = tuple(name for name, _ in window.most_common())
             listed = ", ".join(f"{n} ({window[n]}x)" for n in names)
+            firings = "firing" if self.max_firings == 1 else "firings"
             raise RuleLoopError(
-                f"rules keep firing: more than {self.max_firings} firings in one update;"
+                f"rules keep firing: more than {self.max_firings} {firings} in one update;"
                 f" the last {len(self._recent)} were {listed}",
                 names,
             )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import NoReturn
 
 from rdflib import Literal
@@ -52,6 +53,25 @@ def check_rule(rule: Rule) -> None:
             _fail(rule, item.where, f"variable {free[0]} in the head is not bound by the body")
 
 
+def check_names(rules: Iterable[Rule]) -> None:
+    """Check that no two rules of one rule set share a name: firings and `why` name rules.
+
+    Raises:
+        RuleError: at the second rule of a name, saying where the first one is.
+    """
+    first: dict[str, Location | None] = {}
+    for rule in rules:
+        if rule.name is None:
+            continue
+        if rule.name not in first:
+            first[rule.name] = rule.where
+        elif first[rule.name] == rule.where and rule.where is not None:
+            again = f"{rule.where.file} is read twice (included or given again)"
+            _fail(rule, None, f"duplicate rule name: {again}")
+        else:
+            _fail(rule, None, f"duplicate rule name, first used at {first[rule.name]}")
+
+
 def _fail(rule: Rule, where: Location | None, message: str) -> NoReturn:
     raise RuleError(located(where or rule.where, rule.name, message))
 
@@ -80,7 +100,8 @@ def _check_call(rule: Rule, call: Call, place: Place) -> None:
     if not builtin.accepts(len(call.args)):
         low, high = builtin.arity
         wanted = str(low) if low == high else f"{low} or more" if high is None else f"{low}-{high}"
-        _fail(rule, call.where, f"{call.name}() takes {wanted} arguments, got {len(call.args)}")
+        noun = "argument" if wanted == "1" else "arguments"
+        _fail(rule, call.where, f"{call.name}() takes {wanted} {noun}, got {len(call.args)}")
     if place not in builtin.places:
         where = "body" if place is Place.BODY else "head"
         _fail(rule, call.where, f"{call.name}() cannot be used in a rule's {where}")
@@ -88,11 +109,12 @@ def _check_call(rule: Rule, call: Call, place: Place) -> None:
 
 def _check_indices(rule: Rule, call: Call) -> None:
     last = len(rule.body) - 1
+    has = {-1: "no items", 0: "only item 0"}.get(last, f"items 0..{last}")
     for arg in call.args:
         value = arg.value if isinstance(arg, Literal) else None
         if not isinstance(value, int) or isinstance(value, bool):
             _fail(rule, call.where, f"{call.name}() takes body item numbers, got {arg}")
         if not 0 <= value <= last:
-            _fail(rule, call.where, f"{call.name}({value}): the body has items 0..{last}")
+            _fail(rule, call.where, f"{call.name}({value}): the body has {has}")
         if not isinstance(rule.body[value], Pattern):
             _fail(rule, call.where, f"{call.name}({value}): body item {value} is not a triple")

@@ -20,10 +20,10 @@ from space.errors import InputError
 from space.reasoning.agenda import Agenda
 from space.reasoning.builtins import Context, Registry, default_registry
 from space.reasoning.changes import ChangeLog
-from space.reasoning.checks import check_rule
+from space.reasoning.checks import check_names, check_rule
 from space.reasoning.compile import CompiledRule, RuleIndex
 from space.reasoning.delta import Delta, Firing, Origin, Why
-from space.reasoning.errors import RuleError
+from space.reasoning.errors import RuleError, unreadable
 from space.reasoning.joins import JoinCompiler, Match
 from space.reasoning.owl import owl_rules
 from space.reasoning.parser import load_rules
@@ -45,6 +45,9 @@ class RuleEngine:
         max_firings: production firings one update may take before it is a loop.
         printer: where the `print` builtin writes.
 
+    Raises:
+        RuleError: a rule cannot be used, or two rules share a name.
+
     Not thread-safe: one owner calls `load`, then `apply`, from one thread.
     """
 
@@ -62,6 +65,7 @@ class RuleEngine:
         self.rules = tuple(rules)
         for rule in self.rules:
             check_rule(rule)
+        check_names(self.rules)
         tbox = ontology if isinstance(ontology, Graph) else _graph(ontology or ())
         self.terms = TermTable()
         self._store = TripleStore()
@@ -332,9 +336,15 @@ def read_graph(paths: Iterable[str | Path]) -> Graph:
     graph = Graph()
     for path in paths:
         try:
-            graph.parse(str(path), format=_format(Path(path)))
-        except (OSError, SyntaxError, ValueError) as exc:
-            raise InputError(f"cannot read {path}: {exc}") from exc
+            # Opened here, not by rdflib, which names a missing relative path by a wrong
+            # absolute one; the base for relative IRIs stays the file's own IRI.
+            with open(path, "rb") as handle:
+                base = Path(path).resolve().as_uri()
+                graph.parse(file=handle, format=_format(Path(path)), publicID=base)
+        except OSError as exc:
+            raise InputError(unreadable(path, exc)) from exc
+        except (SyntaxError, ValueError) as exc:
+            raise InputError(f"{path}: {exc}") from exc
     return graph
 
 

@@ -26,3 +26,11 @@ class RuleLoopError(RuleError):
     def __init__(self, message: str, rules: tuple[str, ...]) -> None:
         super().__init__(message)
         self.rules = rules
+
+
+def unreadable(path: object, exc: OSError) -> str:
+    """Return `path: why` for a file that cannot be opened, with the path as the user gave it."""
+    if isinstance(exc, FileNotFoundError):
+        return f"{path}: no such file"
+    reason = exc.strerror or type(exc).__name__
+    return f"{path}: {reason[:1].lower()}{reason[1:]}"

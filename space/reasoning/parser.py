@@ -9,21 +9,21 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
 from decimal import Decimal
 from functools import cache
 from pathlib import Path
 
 from lark import Lark, Token, Tree
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 from rdflib import OWL, RDF, RDFS, XSD, Literal, URIRef
 
 from space.reasoning.builtins import Registry
-from space.reasoning.checks import check_rule, located
-from space.reasoning.errors import RuleError, RuleSyntaxError
+from space.reasoning.checks import check_names, check_rule, located
+from space.reasoning.errors import RuleError, RuleSyntaxError, unreadable
 from space.reasoning.rules import Call, Functor, Item, Location, Pattern, Rule, Term, Var
 
 DEFAULT_PREFIXES = {"rdf": str(RDF), "rdfs": str(RDFS), "owl": str(OWL), "xsd": str(XSD)}
-_RULE_START = re.compile(r"\[\s*([^\s\[\]()<>,'\"?:]+):")
 _ESCAPE = re.compile(r"\\(u[0-9A-Fa-f]{4}|U[0-9A-Fa-f]{8}|.)")
 _SIMPLE = {"t": "\t", "n": "\n", "r": "\r", "b": "\b", "f": "\f"}
 
@@ -46,9 +46,12 @@ def parse_rules(
     Raises:
         RuleSyntaxError: the text is not valid Jena rule syntax, or an include is missing.
         RuleError: a rule uses an unknown builtin, a wrong arity, a bad drop/remove index
-            or a head variable the body does not bind.
+            or a head variable the body does not bind; two rules (includes counted) share
+            a name.
     """
-    return list(_Reader(registry, ()).read(text, source, dict(prefixes or DEFAULT_PREFIXES)))
+    rules = list(_Reader(registry, ()).read(text, source, dict(prefixes or DEFAULT_PREFIXES)))
+    check_names(rules)
+    return rules
 
 
 def load_rules(paths: Iterable[str | Path], registry: Registry) -> list[Rule]:
@@ -58,7 +61,9 @@ def load_rules(paths: Iterable[str | Path], registry: Registry) -> list[Rule]:
         RuleSyntaxError, RuleError: as `parse_rules`; a missing file is a RuleSyntaxError.
     """
     reader = _Reader(registry, ())
-    return [rule for path in paths for rule in reader.read_file(Path(path), DEFAULT_PREFIXES)]
+    rules = [rule for path in paths for rule in reader.read_file(Path(path), DEFAULT_PREFIXES)]
+    check_names(rules)
+    return rules
 
 
 class _Reader:
@@ -77,9 +82,12 @@ class _Reader:
         try:
             text = path.read_text(encoding="utf-8")
         except OSError as exc:
+            message = unreadable(path, exc)
             raise RuleSyntaxError(
-                located(where, None, f"cannot read {path}: {exc.strerror}")
+                located(where, None, f"cannot include {message}" if where else message)
             ) from exc
+        except UnicodeDecodeError as exc:
+            raise RuleSyntaxError(located(where, None, f"{path}: not UTF-8 text")) from exc
         inner = _Reader(self.registry, (*self.including, resolved))
         yield from inner.read(text, str(path), dict(prefixes))
 
@@ -206,24 +214,52 @@ def _unescape(text: str) -> str:
 
 def _syntax_message(exc: UnexpectedInput, text: str, source: str) -> str:
     """Say where parsing stopped, what was there, and in which rule."""
-    line, column = exc.line, exc.column
-    if isinstance(exc, UnexpectedEOF) or line in (None, -1):
-        lines = text.splitlines() or [""]
-        line, column = len(lines), len(lines[-1]) + 1
-        found = "end of file"
-    elif isinstance(exc, UnexpectedToken):
+    opened = _open_brackets(text)
+    rules = [o for o in opened if o.bracket == "["]
+    name = rules[-1].name if rules else None
+    if isinstance(exc, UnexpectedToken) and exc.token.type == "$END":
+        # LALR reports the end as a token placed on the last real one: say where the text ends.
+        where = Location(source, text.count("\n") + 1, len(text) - text.rfind("\n"))
+        message = "syntax error: unexpected end of file"
+        if opened and opened[-1].bracket == "[":
+            rule = f"rule '{name}'" if name else "the rule"
+            message += f": expected ']' to close {rule} opened at line {opened[-1].line}"
+            return located(where, None, message)
+        if opened:
+            message += f": expected ')' to close the '(' opened at line {opened[-1].line}"
+        return located(where, name, message)
+    if isinstance(exc, UnexpectedToken):
         found = repr(str(exc.token))
     elif isinstance(exc, UnexpectedCharacters):
         found = repr(text[exc.pos_in_stream]) if exc.pos_in_stream is not None else "input"
     else:
         found = "input"
-    offset = _offset(text, line, column)
-    starts = [m for m in _RULE_START.finditer(text, 0, offset) if "]" not in text[m.end() : offset]]
-    name = starts[-1].group(1) if starts else None
-    where = Location(source, line, column)
+    where = Location(source, exc.line, exc.column)
     return located(where, name, f"syntax error: unexpected {found}")
 
 
-def _offset(text: str, line: int, column: int) -> int:
-    lines = text.splitlines(keepends=True)
-    return sum(len(x) for x in lines[: max(line - 1, 0)]) + max(column - 1, 0)
+@dataclass
+class _Opened:
+    """A `[` or `(` not closed yet, and the name of the rule a `[` starts."""
+
+    bracket: str
+    line: int
+    name: str | None = None
+
+
+def _open_brackets(text: str) -> list[_Opened]:
+    """Return the brackets still open where parsing stops, outermost first."""
+    opened: list[_Opened] = []
+    parser = _grammar().parse_interactive(text)
+    try:
+        for token in parser.lexer_thread.lex(parser.parser_state):
+            parser.feed_token(token)  # first, so that the token that fails does not count
+            if token.type in ("LSQB", "LPAR"):
+                opened.append(_Opened(str(token), token.line or 0))
+            elif token.type in ("RSQB", "RPAR") and opened:
+                opened.pop()
+            elif token.type == "RULENAME" and opened:
+                opened[-1].name = str(token)[:-1]
+    except UnexpectedInput:
+        pass  # the error being explained: `opened` is the state just before it
+    return opened
