@@ -18,6 +18,7 @@ from types import FrameType
 
 from space.client import TripleSpace
 from space.errors import SpaceError
+from space.hmiport import choose_port
 from space.launch import AgentSpec, Launch
 from space.liveview import Frame, LiveView, robot_line
 from space.mirror import SpaceMirror
@@ -79,6 +80,11 @@ class Deployment:
         self._view_failure = ""
         self.scenario: ScenarioRun | None = None
         self.robot = launch.robots[0] if launch.robots else "robot1"
+        self.hmi_port: int | None = None
+
+    def hmi_agent(self) -> AgentSpec | None:
+        """Return the launch file's HMI agent, if it has one."""
+        return next((a for a in self.launch.agents if a.module == "agents.hmi"), None)
 
     def agent_argv(self, agent: AgentSpec) -> tuple[str, ...]:
         """Return the command line of one agent process."""
@@ -87,17 +93,13 @@ class Deployment:
         if agent.robot:
             argv += ["--robot", agent.robot]
         args = list(agent.args)
-        if self.options.hmi_port is not None and agent.module == "agents.hmi":
-            args = _set_option(args, "--http-port", str(self.options.hmi_port))
+        if self.hmi_port is not None and agent.module == "agents.hmi":
+            args = _set_option(args, "--http-port", str(self.hmi_port))
         return (*argv, *args)
 
     def hmi_url(self) -> str | None:
-        """Return the URL of the HMI agent's page, if the launch file has one."""
-        for agent in self.launch.agents:
-            if agent.module == "agents.hmi":
-                port = self.options.hmi_port or agent.option("--http-port") or 8080
-                return f"http://127.0.0.1:{port}/"
-        return None
+        """Return the URL of the HMI agent's page, once `run` chose its port."""
+        return None if self.hmi_port is None else f"http://127.0.0.1:{self.hmi_port}/"
 
     def run(self) -> int:
         """Start everything, show it until stopped, stop everything; return the exit code.
@@ -107,8 +109,12 @@ class Deployment:
         Raises:
             ConfigError, ListenFailed: the store's router could not listen on `listen`
                 (checked before anything starts, so the user reads why at once).
+            InputError: the HMI's port, named by `--hmi-port` or the launch file, is taken.
         """
         check_can_listen(self.options.listen)
+        hmi = self.hmi_agent()
+        if hmi is not None:
+            self.hmi_port = choose_port(hmi, self.options.hmi_port, self.view.event)
         previous = {
             sig: signal.signal(sig, self._on_signal) for sig in (signal.SIGINT, signal.SIGTERM)
         }

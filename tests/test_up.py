@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import re
 import signal
+import socket
 import subprocess
 import urllib.request
 from pathlib import Path
@@ -11,7 +13,7 @@ from pathlib import Path
 import pytest
 from uprun import Up, alive
 
-from conftest import REPO, tspace_cmd, wait_for
+from conftest import REPO, free_port, tspace_cmd, wait_for
 
 LAUNCH = """
 space = "ward"
@@ -121,6 +123,66 @@ def test_a_broken_launch_file_is_reported_in_one_line(tmp_path):
     assert result.stderr.strip().splitlines() == [
         "tspace up: every [[agent]] needs a name: {'module': 'agents.hmi'}"
     ]
+
+
+def test_a_missing_launch_file_is_reported_in_one_line(tmp_path):
+    result = subprocess.run(
+        tspace_cmd("up", "nosuch.toml", "--data", str(tmp_path)),
+        capture_output=True,
+        text=True,
+        timeout=30,
+        cwd=tmp_path,
+    )
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == [
+        "tspace up: cannot read launch file nosuch.toml: No such file or directory"
+    ]
+
+
+@pytest.mark.parametrize("named_by", ["--hmi-port", "the launch file"])
+def test_a_taken_hmi_port_that_was_named_stops_up_at_once_in_one_line(tmp_path, launch, named_by):
+    with socket.socket() as holder:
+        holder.bind(("127.0.0.1", 0))
+        holder.listen()
+        port = holder.getsockname()[1]
+        if named_by == "--hmi-port":
+            extra = ["--hmi-port", str(port)]
+            source = "--hmi-port"
+        else:
+            launch.write_text(launch.read_text() + f'args = ["--http-port", "{port}"]\n')
+            extra = []
+            source = "--http-port of agent hmi in the launch file"
+        listen = f"tcp/127.0.0.1:{free_port()}"
+        argv = tspace_cmd("up", str(launch), "--listen", listen, "--data", str(tmp_path / "data"))
+        result = subprocess.run([*argv, *extra], capture_output=True, text=True, timeout=30)
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == [
+        f"tspace up: HMI port {port} ({source}) is already in use on 127.0.0.1"
+    ]
+    assert not (tmp_path / "data" / "logs").exists()  # nothing was started
+
+
+def test_up_outside_the_project_runs_the_hospital_and_moves_off_a_taken_default_port(tmp_path):
+    """No launch file, run from elsewhere: the shipped hospital, its HMI on a free port."""
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    with socket.socket() as holder:
+        try:
+            holder.bind(("127.0.0.1", 8080))
+            holder.listen()
+        except OSError:
+            pass  # something else holds 8080: taken all the same
+        with Up(tmp_path, None, name_hmi_port=False, cwd=elsewhere) as up:
+            up.wait_started()
+            assert up.stderr_has("HMI port 8080 is already in use on 127.0.0.1; using "), up.logs()
+            line = next(line for line in up.err if "HMI at http://127.0.0.1:" in line)
+            port = int(re.search(r"127\.0\.0\.1:(\d+)/", line).group(1))
+            assert port != 8080
+            wait_for(lambda: "robot1" in robots_shown(port), 30, "the HMI page", up.logs)
+            up.wait_connected("reasoner", "hw_monitor", "nav_monitor", "behavior")
+            assert up.stdout_has("robot1: task Idle, at dock1"), up.logs()
+            up.proc.send_signal(signal.SIGINT)
+            assert up.proc.wait(timeout=30) == 0, up.logs()
 
 
 def post(port: int, path: str, body: dict) -> dict:

@@ -42,22 +42,31 @@ def cmdline(pid: int) -> str:
 class Up:
     """Run `tspace up` on free ports and a fresh data dir, collecting stdout and stderr.
 
+    `launch` None runs the default launch file; `name_hmi_port` False lets `tspace up`
+    choose the HMI's port (`hmi_port` is then None); `cwd` is where it runs.
     Use as a context manager: on exit the whole process tree is killed, whatever happened.
     """
 
-    def __init__(self, tmp: Path, launch: Path, *extra: str) -> None:
+    def __init__(
+        self,
+        tmp: Path,
+        launch: Path | None,
+        *extra: str,
+        name_hmi_port: bool = True,
+        cwd: Path | None = None,
+    ) -> None:
         self.port = free_port()
-        self.hmi_port = free_port()
+        self.hmi_port = free_port() if name_hmi_port else None
         self.data = tmp / "data"
+        self.cwd = cwd
         self.argv = tspace_cmd(
             "up",
-            str(launch),
+            *([str(launch)] if launch is not None else []),
             "--listen",
             f"tcp/127.0.0.1:{self.port}",
             "--data",
             str(self.data),
-            "--hmi-port",
-            str(self.hmi_port),
+            *(["--hmi-port", str(self.hmi_port)] if self.hmi_port is not None else []),
             *extra,
         )
         self.out: list[str] = []
@@ -67,7 +76,7 @@ class Up:
 
     def __enter__(self) -> Up:
         self.proc = subprocess.Popen(
-            self.argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+            self.argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=self.cwd
         )
         for stream, lines in ((self.proc.stdout, self.out), (self.proc.stderr, self.err)):
             threading.Thread(target=self._collect, args=(stream, lines), daemon=True).start()

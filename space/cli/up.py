@@ -25,8 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "launch",
         nargs="?",
         type=Path,
-        default=DEFAULT_LAUNCH,
-        help=f"the launch file (default {DEFAULT_LAUNCH})",
+        help=f"the launch file (default {DEFAULT_LAUNCH}, here or in the project's folder)",
     )
     p.add_argument(
         "--listen",
@@ -64,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     from space.errors import InputError
     from space.launch import read_launch
     from space.liveview import LiveView
-    from space.paths import default_data_dir
+    from space.paths import default_data_dir, shipped
     from space.scenario import SCENARIOS
 
     if args.once and not args.scenario:
@@ -72,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     if args.scenario and args.scenario not in SCENARIOS:
         raise InputError(f"unknown scenario {args.scenario!r}; known: {', '.join(SCENARIOS)}")
     options = Options(
-        launch=read_launch(args.launch),
+        launch=read_launch(args.launch or shipped(DEFAULT_LAUNCH)),
         listen=args.listen or [DEFAULT_ENDPOINT],
         data=args.data or default_data_dir(),
         hmi_port=args.hmi_port,
