@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 from rdflib import Graph
@@ -18,9 +19,11 @@ class RuledState:
     `fired` lists the production rules fired by every `set`, in order.
     """
 
-    def __init__(self, rules: str, data: Graph) -> None:
+    def __init__(self, rules: str | Sequence[str], data: Graph) -> None:
+        names = [rules] if isinstance(rules, str) else rules
         self.engine = RuleEngine.from_files(
-            rules=[REPO / "rules" / rules], ontology=[REPO / "ontology" / "selfconfig.ttl"]
+            rules=[REPO / "rules" / name for name in names],
+            ontology=[REPO / "ontology" / "selfconfig.ttl"],
         )
         self.engine.load(data)
         self.fired: list[str] = []

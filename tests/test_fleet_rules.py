@@ -3,12 +3,14 @@
 The space holds two hospital robots (two docks) and a supermarket guide robot
 (one dock). Each test sets a situation the way the agents would write it and
 checks what a user would notice: where each robot goes, who looks after whom.
+The last tests add rules/presence.rules, as deployed: a robot whose agents are
+all gone (`ac:presence "gone"`, the fleet monitor's fact) and back.
 """
 
 from pathlib import Path
 
 import pytest
-from rdflib import Graph, Literal, Namespace
+from rdflib import RDF, Graph, Literal, Namespace
 from rdflib.term import Node
 from rulestate import RuledState
 
@@ -19,17 +21,26 @@ REPO = Path(__file__).resolve().parents[1]
 ROBOTS = REPO / "ontology" / "robots"
 AC = Namespace("https://w3id.org/tspace/selfconfig#")
 WAITING = Literal("All docks are taken: I am waiting for one to be free.")
+DOCK_FREE = Literal("A dock is free now: I am going to charge.")
 INTERACTION = ("screen", "speakers", "microphone")
 
 
 class Fleet(RuledState):
-    """The engine with the fleet rules (`set`, `get`, `fired`: see `RuledState`)."""
+    """The engine with the fleet rules (`set`, `get`, `fired`: see `RuledState`).
 
-    def __init__(self, *extra: Graph, files: tuple[str, ...] = ("hospital_fleet.ttl",)) -> None:
+    With `presence`, also rules/presence.rules, as the fleet's reasoner runs them.
+    """
+
+    def __init__(
+        self,
+        *extra: Graph,
+        files: tuple[str, ...] = ("hospital_fleet.ttl",),
+        presence: bool = False,
+    ) -> None:
         data = read_graph([ROBOTS / "common.ttl", *(ROBOTS / f for f in files)])
         for graph in extra:
             data += graph
-        super().__init__("fleet.rules", data)
+        super().__init__(("fleet.rules", *(["presence.rules"] if presence else [])), data)
 
     def battery(self, robot: str, level: str) -> None:
         self.set(AC[f"{robot}_battery"], AC.battery_level, Literal(level))
@@ -57,6 +68,15 @@ class Fleet(RuledState):
 
     def modes(self, robot: str, *devices: str) -> list[str]:
         return [str(self.get(AC[f"{robot}_{d}"], AC.running_mode)) for d in devices]
+
+    def presence(self, robot: str, value: str) -> None:
+        """Mark a robot "gone" or "present", as the fleet monitor does."""
+        self.set(AC[robot], AC.presence, Literal(value))
+
+    def available(self) -> set[str]:
+        """Return the robots the rules would send to a waiting patient."""
+        robots = self.engine.graph.subjects(RDF.type, AC.AvailableRobot)
+        return {str(r).removeprefix(str(AC)) for r in robots}
 
 
 @pytest.fixture
@@ -205,3 +225,115 @@ def test_fifty_generated_robots_each_answer_for_themselves():
     others = [f"robot{k}" for k in range(1, 51) if k != 37]
     assert {str(fleet.get(AC[r], AC.current_task)) for r in others} == {str(AC.task_idle)}
     assert {m for r in others for m in fleet.modes(r, *INTERACTION)} == {"active"}
+
+
+def fleet_with_robot3(*, presence: bool = True) -> Fleet:
+    """Return the fleet with a third hospital robot in room 102, next to Ane's room 101."""
+    hospital = Graph().parse(ROBOTS / "hospital_fleet.ttl")
+    robot3 = clone_robot(hospital, AC.robot1, "robot3", place=AC.room_102)
+    return Fleet(robot3, files=("hospital_fleet.ttl", "supermarket.ttl"), presence=presence)
+
+
+def test_a_gone_robot_is_never_sent_to_a_patient_and_is_again_once_back():
+    fleet = fleet_with_robot3()
+    assert fleet.available() == {"robot1", "robot2", "robot3", "guide1"}
+    fleet.presence("robot3", "gone")  # the nearest to Ane's room
+    assert fleet.available() == {"robot1", "robot2", "guide1"}
+    fleet.at("robot1", AC.room_101)
+    fleet.attend("robot1", AC.patient_ane)
+
+    fleet.battery("robot1", "very low")
+    assert fleet.get(AC.robot3, AC.attended_person) is None
+    assert fleet.get(AC.robot3, AC.requested_task) is None
+    assert fleet.get(AC.robot2, AC.attended_person) == AC.patient_ane
+    assert fleet.get(AC.robot2, AC.requested_task) == AC.task_attending_patient
+
+    # Back, it is counted on again: the next patient handed over is its.
+    fleet.presence("robot3", "present")
+    assert "robot3" in fleet.available()
+    fleet.task("robot2", "attending_patient")
+    fleet.battery("robot2", "very low")
+    assert fleet.get(AC.robot3, AC.attended_person) == AC.patient_ane
+    assert fleet.get(AC.robot3, AC.requested_task) == AC.task_attending_patient
+
+
+def test_a_robot_gone_before_taking_a_patient_over_hands_them_on():
+    fleet = fleet_with_robot3()
+    fleet.at("robot1", AC.room_101)
+    fleet.attend("robot1", AC.patient_ane)
+    fleet.battery("robot1", "very low")
+    assert fleet.get(AC.robot3, AC.requested_task) == AC.task_attending_patient
+
+    # robot3 vanishes before its behaviour agent took the request.
+    fleet.presence("robot3", "gone")
+    assert fleet.get(AC.robot2, AC.attended_person) == AC.patient_ane
+    assert fleet.get(AC.robot2, AC.requested_task) == AC.task_attending_patient
+    assert fleet.get(AC.robot3, AC.attended_person) is None
+    assert fleet.get(AC.robot3, AC.requested_task) is None  # nothing to take when back
+    assert fleet.get(AC.patient_ane, AC.handed_over_by) is None
+
+
+def test_a_robot_gone_while_attending_a_patient_is_idle_and_available_when_back():
+    fleet = Fleet(files=("hospital_fleet.ttl", "supermarket.ttl"), presence=True)
+    fleet.attend("robot1", AC.patient_ane)
+    fleet.presence("robot1", "gone")
+    assert fleet.get(AC.robot2, AC.attended_person) == AC.patient_ane
+    assert fleet.get(AC.robot1, AC.attended_person) is None
+    assert fleet.get(AC.robot1, AC.current_task) == AC.task_idle
+    assert "robot1" not in fleet.available()
+
+    fleet.presence("robot1", "present")
+    assert "robot1" in fleet.available()
+    assert fleet.get(AC.robot2, AC.attended_person) == AC.patient_ane
+
+
+def test_a_gone_robots_dock_is_freed_and_it_waits_for_one_when_back():
+    fleet = Fleet(presence=True)
+    fleet.set(AC.dock2, AC.dock_status, Literal("out of service"))
+    fleet.battery("robot1", "very low")
+    assert fleet.get(AC.robot1, AC.dock) == AC.dock1
+    fleet.battery("robot2", "very low")
+    assert fleet.get(AC.robot2, AC.announcement) == WAITING
+
+    fleet.presence("robot1", "gone")  # on its way to dock 1
+    assert fleet.get(AC.robot1, AC.dock) is None
+    assert fleet.get(AC.robot2, AC.dock) == AC.dock1
+    assert fleet.get(AC.dock1, AC.dock_status) == Literal("occupied")
+    assert fleet.get(AC.robot2, AC.announcement) == DOCK_FREE
+
+    # Back, it still has to charge: it waits for the dock robot2 took.
+    fleet.presence("robot1", "present")
+    assert fleet.get(AC.robot1, AC.current_task) == AC.task_going_to_dock
+    assert fleet.get(AC.robot1, AC.dock) is None
+    assert fleet.get(AC.robot1, AC.announcement) == WAITING
+    fleet.task("robot2", "docking")
+    fleet.charge_and_leave("robot2")
+    assert fleet.get(AC.robot1, AC.dock) == AC.dock1
+    assert fleet.get(AC.dock2, AC.dock_status) == Literal("out of service")
+
+
+def test_a_robot_gone_while_charging_gets_no_dock_until_it_is_back():
+    fleet = Fleet(presence=True)
+    fleet.battery("robot1", "very low")
+    fleet.task("robot1", "docking")
+    fleet.task("robot1", "charging")
+    assert fleet.get(AC.robot1, AC.dock) == AC.dock1
+
+    fleet.presence("robot1", "gone")
+    assert fleet.get(AC.dock1, AC.dock_status) == Literal("free")
+    assert fleet.get(AC.robot1, AC.dock) is None  # a free dock, but not for a gone robot
+    # It lost its dock: when back it must go and get one, not charge nowhere.
+    assert fleet.get(AC.robot1, AC.current_task) == AC.task_going_to_dock
+
+    fleet.presence("robot1", "present")
+    assert fleet.get(AC.robot1, AC.dock) == AC.dock1
+    assert fleet.get(AC.dock1, AC.dock_status) == Literal("occupied")
+
+
+def test_a_gone_robots_dock_taken_out_of_service_stays_out_of_service():
+    fleet = Fleet(presence=True)
+    fleet.battery("robot1", "very low")
+    fleet.set(AC.dock1, AC.dock_status, Literal("out of service"))
+    fleet.presence("robot1", "gone")
+    assert fleet.get(AC.robot1, AC.dock) is None
+    assert fleet.get(AC.dock1, AC.dock_status) == Literal("out of service")
