@@ -12,7 +12,15 @@ class SpaceUnavailable(SpaceError):
 
 
 class SpaceTimeout(SpaceError):
-    """A store was reachable but did not answer in time."""
+    """A store was reachable but did not answer in time (a write may still be applied)."""
+
+
+class ConfigError(SpaceError, ValueError):
+    """A Zenoh endpoint or configuration file given by the user is malformed."""
+
+
+class ListenFailed(SpaceError):
+    """A router could not listen on an endpoint (address in use, not an address of this host)."""
 
 
 class ChangesetRejected(SpaceError):
@@ -32,4 +40,8 @@ class QueryError(SpaceError):
 
 
 class InputError(SpaceError, ValueError):
-    """A document given by the user (Turtle file, template) is malformed."""
+    """A document or name given by the user (Turtle file, template, space name) is malformed."""
+
+
+class UsageError(SpaceError):
+    """A command line asks for something its options cannot mean (exit 2, as argparse's)."""

@@ -12,8 +12,8 @@ from pathlib import Path
 import zenoh
 
 from space.heap import freeze_startup
+from space.session import open_router
 from space.store.server import StoreServer
-from space.zconfig import make_config
 
 log = logging.getLogger("tspace.serve")
 
@@ -29,11 +29,15 @@ def open_server(
     connect: list[str] | None = None,
     store: bool = True,
 ) -> Iterator[StoreServer | None]:
-    """Open a router-mode Zenoh session with the store on it (unless `store=False`); close both."""
+    """Open a router-mode Zenoh session with the store on it (unless `store=False`); close both.
+
+    Raises:
+        ConfigError: an endpoint or the configuration file is malformed.
+        ListenFailed: the router cannot listen (the port is taken, say).
+    """
     from space.paths import default_data_dir
 
-    conf = make_config(mode="router", listen=listen, connect=connect, config_file=config_file)
-    session = zenoh.open(conf)
+    session = open_router(listen, connect=connect, config_file=config_file)
     try:
         listener = session.info.declare_transport_events_listener(_log_transport)
         # Meshed with other routers, a store first looks a while for a leading store there.
@@ -62,7 +66,7 @@ def _log_transport(event: zenoh.TransportEvent) -> None:
 
 
 def serve_forever(**kwargs: object) -> None:
-    """Run `open_server(**kwargs)` until SIGINT or SIGTERM."""
+    """Run `open_server(**kwargs)` until SIGINT or SIGTERM; raises what `open_server` raises."""
     stop = threading.Event()
     previous = {
         sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)

@@ -1,17 +1,25 @@
 """Turn command-line style options into a `zenoh.Config`.
 
 Every agent and CLI command goes through here so that `--connect`, `--listen`
-and `--config` mean the same thing everywhere.
+and `--config` mean the same thing everywhere, and fail the same way: a
+malformed endpoint or configuration file is a `ConfigError`, one line.
 """
 
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import zenoh
 
+from space.errors import ConfigError
+
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
+
+# Zenoh appends the Rust source location to its messages: noise for a user.
+_RUST_LOCATION_RE = re.compile(r"\s+at /\S+\.rs:\d+\.?")
+_JSON5_MSG_RE = re.compile(r'msg: "((?:[^"\\]|\\.)*)"')
 
 
 def make_config(
@@ -30,19 +38,61 @@ def make_config(
         listen: endpoints to listen on (routers default to `DEFAULT_ENDPOINT`).
         config_file: a Zenoh JSON5 configuration file read first; the options
             above override what it says.
+
+    Raises:
+        ConfigError: the file cannot be read or parsed, or an endpoint is malformed.
     """
-    conf = zenoh.Config.from_file(str(config_file)) if config_file else zenoh.Config()
-    conf.insert_json5("mode", json.dumps(mode))
+    conf = _read_file(config_file) if config_file else zenoh.Config()
+    _insert(conf, "mode", mode)
     if connect is None and mode != "router" and not config_file:
         connect = [DEFAULT_ENDPOINT]
     if listen is None and mode == "router" and not config_file:
         listen = [DEFAULT_ENDPOINT]
     if connect is not None:
-        conf.insert_json5("connect/endpoints", json.dumps(connect))
+        _insert_endpoints(conf, "connect/endpoints", connect)
     if listen is not None:
-        conf.insert_json5("listen/endpoints", json.dumps(listen))
+        _insert_endpoints(conf, "listen/endpoints", listen)
     if not config_file:
         # Explicit endpoints only: multicast scouting would make separate test
         # routers on one machine find each other and merge their spaces.
         conf.insert_json5("scouting/multicast/enabled", "false")
     return conf
+
+
+def zenoh_reason(exc: zenoh.ZError) -> str:
+    """Return the part of a Zenoh error a user can act on, on one line."""
+    text = _RUST_LOCATION_RE.sub("", str(exc))
+    if (found := _JSON5_MSG_RE.search(text)) is not None:
+        text = found.group(1)
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    # A JSON5 syntax error spans lines: `--> line:col`, the source, `= what was expected`.
+    where = next((line[3:].strip() for line in lines if line.startswith("-->")), None)
+    what = next((line[1:].strip() for line in lines if line.startswith("=")), None)
+    if what is not None:
+        return f"line {where}: {what}" if where else what
+    return " ".join(lines)
+
+
+def _read_file(path: str | Path) -> zenoh.Config:
+    try:
+        return zenoh.Config.from_file(str(path))
+    except zenoh.ZError as exc:
+        raise ConfigError(f"cannot read Zenoh configuration {path}: {zenoh_reason(exc)}") from exc
+
+
+def _insert(conf: zenoh.Config, key: str, value: object) -> None:
+    try:
+        conf.insert_json5(key, json.dumps(value))
+    except zenoh.ZError as exc:
+        raise ConfigError(f"bad {key} {value!r}: {zenoh_reason(exc)}") from exc
+
+
+def _insert_endpoints(conf: zenoh.Config, key: str, endpoints: list[str]) -> None:
+    """Insert endpoints, naming the first malformed one if Zenoh refuses them."""
+    for endpoint in endpoints:
+        try:
+            zenoh.Config().insert_json5(key, json.dumps([endpoint]))
+        except zenoh.ZError as exc:
+            reason = zenoh_reason(exc).removesuffix(f": {endpoint}")
+            raise ConfigError(f"bad endpoint {endpoint!r}: {reason}") from exc
+    _insert(conf, key, endpoints)
