@@ -73,21 +73,24 @@ class Changeset:
         return msgpack.packb(self.to_wire(texts), use_bin_type=True)
 
     @classmethod
-    def from_wire(cls, wire: object) -> Changeset:
+    def from_wire(cls, wire: object, *, published: bool = False) -> Changeset:
         """Build a changeset from its decoded map.
+
+        A writer's changeset must carry its `id`; one the store published or
+        logged (`published=True`) also its `seq` (see `published_seq`).
 
         Raises:
             MalformedPayload: a field is missing, of the wrong type, or a term is invalid.
         """
-        if not isinstance(wire, dict):
-            raise MalformedPayload("a changeset payload is a msgpack map")
+        seq = published_seq(wire) if published else None
+        wire = _checked(wire)
         try:
             lists = [[triple_from_nt(t) for t in wire.get(name) or ()] for name in LISTS]
             prefixes = wire.get("prefixes") or {}
             if not isinstance(prefixes, dict):
                 raise MalformedPayload("'prefixes' must be a map")
             cs = cls(
-                id=str(wire.get("id") or uuid.uuid4().hex),
+                id=wire["id"],
                 agent=str(wire.get("agent") or ""),
                 timestamp=str(wire.get("ts") or ""),
                 cause=str(wire["cause"]) if wire.get("cause") else None,
@@ -96,7 +99,7 @@ class Changeset:
                 inferred_added=lists[2],
                 inferred_removed=lists[3],
                 prefixes={str(k): str(v) for k, v in prefixes.items()},
-                seq=int(wire.get("seq") or 0),
+                seq=seq if seq is not None else int(wire.get("seq") or 0),
             )
         except (TypeError, ValueError) as exc:
             raise MalformedPayload(f"bad changeset field: {exc}") from exc
@@ -105,13 +108,46 @@ class Changeset:
         return cs
 
     @classmethod
-    def decode(cls, payload: bytes) -> Changeset:
-        """Parse a msgpack payload.
+    def decode(cls, payload: bytes, *, published: bool = False) -> Changeset:
+        """Parse a msgpack payload (`published` as in `from_wire`).
 
         Raises:
             MalformedPayload: not msgpack, or not a changeset.
         """
-        return cls.from_wire(unpack(payload))
+        return cls.from_wire(unpack(payload), published=published)
+
+
+def _checked(wire: object) -> dict:
+    """Return a changeset map after checking what every one carries: a string id, a known version.
+
+    Raises:
+        MalformedPayload: naming the field that is missing or wrong.
+    """
+    if not isinstance(wire, dict):
+        raise MalformedPayload("a changeset payload is a msgpack map")
+    ident = wire.get("id")
+    if not isinstance(ident, str) or not ident:
+        raise MalformedPayload(f"a changeset has a non-empty string 'id', got {ident!r}")
+    version = wire.get("v", WIRE_VERSION)
+    if version != WIRE_VERSION:
+        raise MalformedPayload(f"unknown changeset version {version!r} (this is {WIRE_VERSION})")
+    return wire
+
+
+def published_seq(wire: object) -> int:
+    """Return the sequence number of a changeset the store published or logged.
+
+    Checked before anything else is read, so that a subscriber that skips a
+    changeset unparsed still refuses a malformed one, and trusts no seq of a
+    message that is not a changeset.
+
+    Raises:
+        MalformedPayload: not a changeset map with an id, or no positive integer `seq`.
+    """
+    seq = _checked(wire).get("seq")
+    if not isinstance(seq, int) or isinstance(seq, bool) or seq < 1:
+        raise MalformedPayload(f"a published changeset has a positive integer 'seq', got {seq!r}")
+    return seq
 
 
 def unpack(payload: bytes) -> object:

@@ -73,12 +73,23 @@ class TripleSpace:
     ) -> TripleSpace:
         """Open a session to the routers at `connect` and a handle on `space`.
 
+        Blocks until a router is reached. `prefixes` (name -> namespace IRI) are
+        used in templates and sent with the changesets that use them, so the
+        space learns them too.
+
         Raises:
+            InputError: `space` is not a legal space name (checked before connecting).
+            ConfigError: an endpoint or the configuration file is malformed.
             SpaceUnavailable: no router reachable.
         """
+        keys.check_space(space)
         endpoints = [connect] if isinstance(connect, str) else connect
         session = open_session(endpoints, mode=mode, config_file=config_file)
-        return cls(session, space, agent=agent, prefixes=prefixes, _owns_session=True)
+        try:
+            return cls(session, space, agent=agent, prefixes=prefixes, _owns_session=True)
+        except BaseException:
+            session.close()
+            raise
 
     def close(self) -> None:
         """Undeclare every subscription and close the session if this handle opened it."""
@@ -134,7 +145,9 @@ class TripleSpace:
         """Send a changeset and wait until the store has made it durable; return its id.
 
         Raises:
-            SpaceUnavailable: no store acknowledged within `timeout`.
+            SpaceUnavailable: no store was reachable within `timeout`.
+            SpaceTimeout: a store was reached but did not acknowledge within
+                `timeout`; the changeset may still be applied.
             ChangesetRejected: the store refused it.
         """
         ask_store(self.session, self._key("write"), cs.encode(), timeout, what="write")

@@ -16,7 +16,7 @@ import re
 from rdflib import BNode, Literal, URIRef
 from rdflib.term import Node
 
-from space.errors import MalformedPayload
+from space.errors import InputError, MalformedPayload
 from space.prefixes import PrefixMap
 from space.terms import CACHED, Triple, from_nt, to_nt
 
@@ -33,9 +33,13 @@ _TYPED_PNAME_RE = re.compile(r'^(".*")\^\^([^<>"]+)$', re.S)
 
 
 def check_space(name: str) -> str:
-    """Return a space name that is one legal key chunk, or raise ValueError."""
-    if not _SPACE_RE.match(name):
-        raise ValueError(f"space name {name!r}: use letters, digits, '_', '-' or '.'")
+    """Return a space name that is one legal key chunk.
+
+    Raises:
+        InputError: (a ValueError) the name has a character a key chunk cannot hold.
+    """
+    if not isinstance(name, str) or not _SPACE_RE.match(name):
+        raise InputError(f"space name {name!r}: use letters, digits, '_', '-' or '.'")
     return name
 
 

@@ -7,7 +7,7 @@ import time
 import zenoh
 
 from space.changeset import unpack
-from space.errors import ChangesetRejected, QueryError, SpaceUnavailable
+from space.errors import ChangesetRejected, QueryError, SpaceTimeout, SpaceUnavailable
 
 
 def ask_store(
@@ -20,8 +20,11 @@ def ask_store(
     a replica taking over) the request is sent again until the timeout.
 
     Raises:
-        SpaceUnavailable: no store answered in time.
+        SpaceUnavailable: no store was reachable in time.
+        SpaceTimeout: a store was reached but did not answer in time (a write
+            may still be applied).
         QueryError: the store answered with an error (bad SPARQL, malformed request).
+        ChangesetRejected: the store refused a write (`what="write"`).
     """
     deadline = time.monotonic() + timeout
     while True:
@@ -54,7 +57,7 @@ class Pending:
         """Wait for the reply and return it decoded.
 
         Raises:
-            SpaceUnavailable, QueryError, ChangesetRejected: as `ask_store`.
+            SpaceUnavailable, SpaceTimeout, QueryError, ChangesetRejected: as `ask_store`.
         """
         replies = list(self._replies)
         left = self._deadline - time.monotonic()
@@ -73,15 +76,24 @@ def _get(session: zenoh.Session, key: str, payload: bytes, timeout: float) -> ze
     )
 
 
+# The error reply Zenoh itself makes when a queryable was reached but did not answer in
+# time; the store's own error replies are sentences, never this one word.
+_ZENOH_TIMEOUT = "Timeout"
+
+
 def _decode(replies: list[zenoh.Reply], key: str, timeout: float, what: str) -> dict:
+    errors = []
     for reply in replies:
         if reply.ok is not None:
             value = unpack(reply.ok.payload.to_bytes())
             if not isinstance(value, dict):
                 raise QueryError(f"unexpected reply to {what}: {value!r}")
             return value
-        message = reply.err.payload.to_string() if reply.err is not None else "unknown error"
-        if what == "write":
-            raise ChangesetRejected(message)
-        raise QueryError(message)
+        errors.append(reply.err.payload.to_string() if reply.err is not None else "unknown error")
+    refusals = [message for message in errors if message != _ZENOH_TIMEOUT]
+    if refusals:
+        raise (ChangesetRejected if what == "write" else QueryError)(refusals[0])
+    if errors:
+        late = " (the changeset may still be applied)" if what == "write" else ""
+        raise SpaceTimeout(f"no answer from the store to the {what} within {timeout:g} s{late}")
     raise SpaceUnavailable(f"no store answered the {what} on {key} within {timeout:g} s")

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import zenoh
 from rdflib.term import Node
 
-from space.changeset import LISTS, Changeset, unpack
+from space.changeset import LISTS, Changeset, published_seq, unpack
 from space.errors import MalformedPayload, SpaceError
 from space.template import Template
 
@@ -78,20 +78,17 @@ class Subscription:
         """Return a change's sequence number and changeset; None for a changeset skipped unparsed.
 
         Raises:
-            MalformedPayload: not msgpack, not a changeset, or (if parsed) a term is invalid.
+            MalformedPayload: not msgpack, not a published changeset (no id, no seq),
+                or (if parsed) a term is invalid.
         """
         wire = unpack(payload)
-        if not isinstance(wire, dict):
-            raise MalformedPayload("a changeset payload is a msgpack map")
-        try:
-            seq = int(wire.get("seq") or 0)
-        except (TypeError, ValueError) as exc:
-            raise MalformedPayload(f"bad changeset seq: {exc}") from exc
+        seq = published_seq(wire)
+        assert isinstance(wire, dict)
         if self.skip_agent is not None and wire.get("agent") == self.skip_agent:
             return seq, None
         if self.skip_subjects is not None:
             wire = _without_subjects(wire, f"<{self.skip_subjects}")
-        return seq, Changeset.from_wire(wire)
+        return seq, Changeset.from_wire(wire, published=True)
 
     def skips(self, triple: tuple[Node, Node, Node]) -> bool:
         """Return True for a triple this subscription leaves out (its subject has the prefix)."""
@@ -254,11 +251,23 @@ class Dispatcher:
             return
         if seq <= sub.last_seq:
             return
-        if seq > sub.last_seq + 1:
-            self._fill_gap(sub, seq - 1)
-        self._deliver(sub, seq, cs)
+        if seq == sub.last_seq + 1:
+            self._deliver(sub, seq, cs)
+            return
+        # A gap. Anyone can publish on the changes key: a seq the store's log does not
+        # hold must not move `last_seq`, or every later real change would look old.
+        # So the log, not this message, says what happened up to it.
+        self._fill_gap(sub, seq)
+        if sub.last_seq < seq:
+            log.warning(
+                "change %d is not in the store's log: skipped (delivered up to %d); "
+                "if real, the store's heartbeat brings it back",
+                seq,
+                sub.last_seq,
+            )
 
     def _fill_gap(self, sub: Subscription, last: int) -> None:
+        """Deliver what the store's log holds after `sub.last_seq`, up to `last` at most."""
         try:
             missed = self._fetch_log(sub.last_seq + 1, last)
         except SpaceError as exc:

@@ -32,13 +32,25 @@ _TOKEN_RE = re.compile(
 )
 
 
+_VAR_RE = re.compile(r"\?[A-Za-z_]\w*")
+
+
 @dataclass(frozen=True)
 class Template:
-    """A triple pattern; `None` and `Variable` positions match anything."""
+    """A triple pattern; `None` and `Variable` positions match anything.
+
+    A position may also be given as a plain string `"?name"`, read as
+    `Variable("name")`, as in template texts; any other plain string is
+    refused (a string is not an RDF term: use `URIRef`, `Literal` or `parse`).
+    """
 
     s: Slot = None
     p: Slot = None
     o: Slot = None
+
+    def __post_init__(self) -> None:
+        for name in ("s", "p", "o"):
+            object.__setattr__(self, name, _position(getattr(self, name)))
 
     @classmethod
     def of(
@@ -111,6 +123,24 @@ class Template:
 
     def __str__(self) -> str:
         return " ".join("*" if t is None else t.n3() for t in self.slots())
+
+
+def _position(value: object) -> Slot:
+    """Return a template position as a term, a Variable or None.
+
+    Raises:
+        TemplateError: a plain string other than `?name`, or not an RDF term at all.
+    """
+    if value is None or isinstance(value, Node):
+        return value
+    if isinstance(value, str):
+        if _VAR_RE.fullmatch(value):
+            return Variable(value[1:])
+        raise TemplateError(
+            f"template position {value!r} is a plain string: give None, '?name', an rdflib "
+            "URIRef or Literal, or the whole template as text (Template.parse)"
+        )
+    raise TemplateError(f"template position {value!r} is not an RDF term, None or '?name'")
 
 
 def _slot(match: re.Match[str], prefixes: PrefixMap, text: str) -> Slot:

@@ -2,6 +2,7 @@
 
 import threading
 from itertools import pairwise
+from pathlib import Path
 
 import pytest
 import zenoh
@@ -9,7 +10,15 @@ from rdflib import Graph, Literal, Namespace, URIRef
 from rdflib.namespace import OWL, RDF
 
 from conftest import AC_NS, wait_for
-from space import SpaceUnavailable, TripleSpace
+from space import (
+    Change,
+    InputError,
+    SpaceTimeout,
+    SpaceUnavailable,
+    Template,
+    TemplateError,
+    TripleSpace,
+)
 from space.zconfig import make_config
 
 AC = Namespace(AC_NS)
@@ -235,3 +244,55 @@ def test_send_later_without_a_store_fails_at_result(tmp_path):
 def test_iri_unaffected_by_unregistered_prefix(ts):
     ts.write([(URIRef("http://other.org/a/b"), URIRef("http://other.org/p#q"), Literal("x"))])
     assert len(ts.query("<http://other.org/a/b> ?p ?o")) == 1
+
+
+def test_open_checks_the_space_name_before_connecting():
+    from conftest import free_port
+
+    nowhere = f"tcp/127.0.0.1:{free_port()}"  # no router: a session would fail differently
+    with pytest.raises(InputError, match="space name 'bad/name'"):
+        TripleSpace.open(nowhere, space="bad/name")
+    assert issubclass(InputError, ValueError)
+
+
+def test_tuple_templates_take_question_mark_names_as_variables(ts):
+    ts.write(ROBOT)
+    assert set(ts.read(("?s", AC.battery_level, None))) == {ROBOT[3]}
+    assert set(ts.query(("?d", RDF.type, "?c"))) == {ROBOT[0], ROBOT[2]}
+    assert Template("?s", "?p", "?o").variables() == ["s", "p", "o"]
+    seen: list[Change] = []
+    ts.subscribe(("?b", AC.battery_level, "?l"), seen.append)
+    ts.write([(AC.robot1_battery, AC.battery_level, Literal("low"))])
+    wait_for(lambda: seen, what="the change")
+    assert seen[0].bindings == [{"b": AC.robot1_battery, "l": Literal("low")}]
+
+
+@pytest.mark.parametrize("position", ["robot1", "ac:robot1", "?", 42])
+def test_a_tuple_template_refuses_what_is_not_a_term_or_a_variable(ts, position):
+    with pytest.raises(TemplateError, match="template position"):
+        ts.read((position, AC.battery_level, None))
+
+
+def test_a_store_too_busy_to_answer_in_time_raises_space_timeout(ts):
+    big = [(AC[f"s{i}"], AC.n, Literal(i)) for i in range(20_000)]  # ~0.5 s of the store's time
+    with pytest.raises(SpaceTimeout, match=r"0\.05 s \(the changeset may still be applied\)"):
+        ts.write(big, timeout=0.05)
+    with pytest.raises(SpaceTimeout, match=r"no answer from the store to the query within 0\.05 s"):
+        ts.query((AC.s0, None, None), timeout=0.05)  # queued behind that write
+    wait_for(lambda: len(ts.query((None, AC.n, None))) == len(big), 30, "the late write")
+
+
+def test_the_readme_python_example_runs_on_a_fresh_space(server, space_name):
+    import subprocess
+    import sys
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    example = readme.split("## From Python", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    assert 'space="hospital"' in example and '"tcp/127.0.0.1:7447"' in example
+    example = example.replace('space="hospital"', f'space="{space_name}"')
+    example = example.replace('"tcp/127.0.0.1:7447"', f'"{server.endpoint}"')
+    out = subprocess.run(
+        [sys.executable, "-c", example], capture_output=True, text=True, timeout=60
+    )
+    assert out.returncode == 0, out.stderr
+    assert 'ac:battery_level "very low"' in out.stdout

@@ -1,12 +1,17 @@
 """Garbage from the network is logged once and skipped; the store keeps serving, state intact."""
 
+import itertools
+import subprocess
+import threading
+
 import msgpack
 import pytest
 import zenoh
 from rdflib import Literal, Namespace
 
-from conftest import AC_NS
-from space import ChangesetRejected, QueryError
+from conftest import AC_NS, tspace_cmd, wait_for
+from space import Change, Changeset, ChangesetRejected, MalformedPayload, QueryError
+from space.zconfig import make_config
 
 AC = Namespace(AC_NS)
 GARBAGE = [
@@ -18,6 +23,18 @@ GARBAGE = [
     msgpack.packb({"add": [['"literal subject"', "<http://p>", "<http://o>"]]}),
     msgpack.packb({"add": [["<http://s>", "<http://p>", "no term"]]}),
     msgpack.packb({"ts": "not a timestamp", "add": []}),
+    msgpack.packb({"v": 1, "add": [["<http://s>", "<http://p>", "<http://o>"]]}),  # no id
+    msgpack.packb({"v": 99, "id": "x", "add": [["<http://s>", "<http://p>", "<http://o>"]]}),
+]
+# Well-formed msgpack on the store's changes key, none of it published by a store.
+FORGED_CHANGES = [
+    msgpack.packb({"seq": 10**9}),  # no id
+    msgpack.packb({"id": "forged", "v": 1}),  # no seq
+    msgpack.packb({"id": "forged", "v": 1, "seq": "10"}),
+    msgpack.packb({"id": "forged", "v": 1, "seq": 10**9}),  # a seq the store never gave
+    msgpack.packb(
+        {"id": "forged", "v": 1, "seq": 10**9 + 1, "add": [[f"<{AC_NS}x>", f"<{AC_NS}y>", '"z"']]}
+    ),
 ]
 
 
@@ -85,3 +102,52 @@ def test_store_logs_one_line_per_malformed_message(ts, server):
     assert len(lines) >= 1
     assert all("Traceback" not in line for line in lines)
     assert zenoh  # the session used above is a plain Zenoh session
+
+
+@pytest.mark.parametrize("payload", FORGED_CHANGES[:3])
+def test_a_published_changeset_needs_its_id_and_seq(payload):
+    with pytest.raises(MalformedPayload):
+        Changeset.decode(payload, published=True)
+
+
+def test_forged_changes_do_not_deafen_subscribers(ts, server):
+    """A forged far-future seq once made every subscriber skip every later real change."""
+    seen: list[Change] = []
+    ts.subscribe("?b ac:battery_level ?l", seen.append)
+    cmd = tspace_cmd(
+        "watch", "?b ac:battery_level ?l", "--connect", server.endpoint, "--space", ts.space
+    )
+    watcher = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lines: list[str] = []
+    threading.Thread(
+        target=lambda: lines.extend(iter(watcher.stdout.readline, "")), daemon=True
+    ).start()
+    level = (AC.robot1_battery, AC.battery_level)
+    try:
+        probes = itertools.count()
+
+        def watcher_listens() -> bool:
+            ts.write([(AC[f"probe{next(probes)}"], AC.battery_level, Literal("normal"))])
+            return any("normal" in line for line in lines)
+
+        wait_for(watcher_listens, 20, "the watcher's first line")
+        with zenoh.open(make_config(connect=[server.endpoint])) as plain:
+            for payload in FORGED_CHANGES:
+                plain.put(f"tspace/{ts.space}/@/changes", payload)
+            plain.put(f"tspace/{ts.space}/@/seq", msgpack.packb({"seq": 10**9}))  # heartbeat
+            plain.put(f"tspace/{ts.space}/@/seq", msgpack.packb({"seq": "nonsense"}))
+        ts.write([(*level, Literal("low"))])
+        ts.apply([(*level, Literal("very low"))], [(*level, Literal("low"))])
+
+        def delivered(value: str) -> bool:
+            return any(change.added == [(*level, Literal(value))] for change in seen)
+
+        wait_for(lambda: delivered("low") and delivered("very low"), what="the real changes")
+        wait_for(lambda: any('"very low"' in line for line in lines), what="the watcher's line")
+        assert all(change.id != "forged" for change in seen)
+        assert [c.seq for c in seen] == sorted(c.seq for c in seen) and seen[-1].seq < 10**9
+        assert not any('"z"' in line for line in lines)
+    finally:
+        watcher.terminate()
+        _, errors = watcher.communicate(timeout=10)
+    assert "Traceback" not in errors
