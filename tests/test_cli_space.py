@@ -4,6 +4,8 @@ import json
 import subprocess
 import threading
 
+import pytest
+
 from conftest import free_port, tspace_cmd, wait_for
 
 ROBOT_TTL = """@prefix ac: <https://w3id.org/tspace/selfconfig#> .
@@ -132,3 +134,108 @@ def test_bad_sparql_is_one_line_with_position(run_tspace):
     assert out.returncode == 1
     assert len(out.stderr.strip().splitlines()) == 1
     assert "col:8" in out.stderr
+
+
+def test_serve_on_a_taken_port_is_one_line_and_exit_1(server, tmp_path):
+    out = subprocess.run(
+        tspace_cmd("serve", "--listen", server.endpoint, "--data", str(tmp_path / "data")),
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert out.returncode == 1
+    assert (
+        out.stderr == f"tspace serve: cannot listen on {server.endpoint}: address already in use\n"
+    )
+
+
+def test_up_on_a_taken_port_is_one_line_and_exit_1_before_starting_anything(server, tmp_path):
+    out = subprocess.run(
+        tspace_cmd("up", "--listen", server.endpoint, "--data", str(tmp_path / "data")),
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert out.returncode == 1
+    assert out.stderr == f"tspace up: cannot listen on {server.endpoint}: address already in use\n"
+    assert not (tmp_path / "data").exists()  # no store, no agent was started
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["query", "ASK {}", "--connect"],
+        ["write", "-", "--connect"],
+        ["watch", "--connect"],
+        ["take", "?s ?p ?o", "--connect"],
+        ["serve", "--listen", "tcp/127.0.0.1:0", "--connect"],
+        ["up", "--listen"],
+        ["agent", "hw_monitor", "--robot", "robot1", "--connect"],
+    ],
+    ids=lambda c: c[0],
+)
+def test_a_malformed_endpoint_is_one_line_and_exit_1_for_every_command(command, tmp_path):
+    out = subprocess.run(
+        tspace_cmd(*command, "foo:bar", *(["--data", str(tmp_path)] if command[0] == "up" else [])),
+        input="",
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert out.returncode == 1
+    assert len(out.stderr.splitlines()) == 1, out.stderr
+    assert (
+        "bad endpoint 'foo:bar': Endpoints must be of the form <protocol>/<address>" in out.stderr
+    )
+
+
+def test_a_bad_space_name_is_one_line_and_exit_1(server):
+    out = subprocess.run(
+        tspace_cmd("query", "ASK {}", "--connect", server.endpoint, "--space", "bad/name"),
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert out.returncode == 1
+    assert (
+        out.stderr == "tspace query: space name 'bad/name': use letters, digits, '_', '-' or '.'\n"
+    )
+
+
+def test_take_or_turtle_query_with_no_match_prints_nothing(run_tspace):
+    for command in (
+        ["take", "?s <urn:nothing> ?o"],
+        ["query", "-t", "?s <urn:x> ?o", "-f", "turtle"],
+    ):
+        out = run_tspace(*command)
+        assert (out.returncode, out.stdout, out.stderr) == (0, "", "")
+
+
+def test_a_usage_error_exits_2_with_one_line(run_tspace):
+    out = run_tspace("query")
+    assert (out.returncode, out.stderr) == (
+        2,
+        "tspace query: give either SPARQL text or --template\n",
+    )
+
+
+def test_a_write_the_store_is_too_busy_to_acknowledge_says_it_may_still_be_applied(
+    run_tspace, tmp_path
+):
+    big = tmp_path / "big.ttl"
+    big.write_text("".join(f"<urn:s{i}> <urn:p> {i} .\n" for i in range(20_000)))
+    out = run_tspace("write", str(big), "--timeout", "0.05")  # the store needs ~0.5 s for it
+    assert out.returncode == 1
+    assert out.stdout == ""
+    assert out.stderr == (
+        "tspace write: no answer from the store to the write within 0.05 s "
+        "(the changeset may still be applied)\n"
+    )
+
+    def count() -> int:
+        answer = run_tspace(
+            "query", "SELECT (COUNT(*) AS ?n) WHERE { ?s <urn:p> ?o }", "-f", "json"
+        )
+        return int(json.loads(answer.stdout)["results"]["bindings"][0]["n"]["value"])
+
+    wait_for(lambda: count() == 20_000, 30, "the late changeset to be applied")

@@ -15,7 +15,7 @@ import logging
 import pkgutil
 import sys
 
-from space.errors import SpaceError
+from space.errors import SpaceError, UsageError
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -40,12 +40,18 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run `tspace` and return its exit code; errors become one line on stderr."""
+    """Run `tspace` and return its exit code; errors become one line on stderr.
+
+    Exit codes: 0 success, 1 failure, 2 usage error (argparse's own, or `UsageError`).
+    """
     args = build_parser().parse_args(argv)
     level = [logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)]
     logging.basicConfig(level=level, format="%(asctime)s %(name)s %(levelname)s %(message)s")
     try:
         return int(args.func(args) or 0)
+    except UsageError as exc:
+        print(f"tspace {args.command}: {exc}", file=sys.stderr)
+        return 2
     except SpaceError as exc:
         print(f"tspace {args.command}: {exc}", file=sys.stderr)
         return 1
@@ -53,6 +59,10 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except OSError as exc:  # a file or directory the user named (`serve --data`, say)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"tspace {args.command}: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

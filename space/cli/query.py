@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from space.cli.options import add_connect, open_space
+from space.errors import UsageError
 
 ORDER = 40
 FORMATS = ("table", "json", "turtle")
@@ -17,7 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "query",
         help="query the space with SPARQL or a triple template",
         description="Run a SPARQL SELECT/ASK/CONSTRUCT, or match a template such as "
-        "'?s ac:battery_level ?o' (prefixes: those registered in the space).",
+        "'?s ac:battery_level ?o' (prefixes: those registered in the space). "
+        "No match: a table prints its header only, Turtle prints nothing; exit 0 either way.",
     )
     p.add_argument("sparql", nargs="?", metavar="SPARQL", help="SPARQL query text (- for stdin)")
     p.add_argument("--template", "-t", metavar="TEMPLATE", help="a triple template instead")
@@ -39,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     from space.cli.results import print_sparql, print_template
 
     if (args.sparql is None) == (args.template is None):
-        raise SystemExit("tspace query: give either SPARQL text or --template")
+        raise UsageError("give either SPARQL text or --template")
     with open_space(args, agent="tspace-query") as ts:
         prefixes = ts.load_prefixes(timeout=args.timeout)
         if args.template is not None:

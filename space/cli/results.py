@@ -15,7 +15,13 @@ from space.terms import Triple
 
 
 def print_graph(graph: Graph, prefixes: PrefixMap, out: TextIO) -> None:
-    """Write a graph as Turtle with the space's prefixes."""
+    """Write a graph as Turtle with the space's prefixes; nothing at all for an empty graph.
+
+    So that `tspace take` / `query -f turtle` with no match print nothing, and
+    `[ -z "$(tspace take ...)" ]` tells "nothing matched" in a script.
+    """
+    if not len(graph):
+        return
     for name, ns in prefixes.as_dict().items():
         graph.bind(name, ns, override=True)
     out.write(graph.serialize(format="turtle"))

@@ -16,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "take",
         help="remove and print the triples matching a template",
         description="Atomically read and remove the asserted triples matching TEMPLATE; "
-        "print them as Turtle.",
+        "print them as Turtle. Nothing matched: prints nothing and exits 0.",
     )
     p.add_argument("template", metavar="TEMPLATE", help="e.g. '?s ac:requested_task ?t'")
     add_connect(p)

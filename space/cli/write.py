@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from space.cli.options import add_connect, open_space
+from space.errors import UsageError
 
 ORDER = 30
 
@@ -29,7 +30,7 @@ def run(args: argparse.Namespace) -> int:
     from space.turtle import read_turtle
 
     if args.file is None and args.remove is None:
-        raise SystemExit("tspace write: give a FILE to add and/or --remove FILE")
+        raise UsageError("give a FILE to add and/or --remove FILE")
     added = read_turtle(args.file) if args.file else None
     removed = read_turtle(args.remove) if args.remove else None
     with open_space(args, agent="tspace-write") as ts:
