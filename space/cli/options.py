@@ -34,6 +34,8 @@ def open_space(args: argparse.Namespace, agent: str) -> TripleSpace:
     """Open the space named by `--space` through the routers of `--connect`.
 
     Raises:
+        InputError: `--space` is not a legal space name.
+        ConfigError: a `--connect` endpoint or the `--config` file is malformed.
         SpaceUnavailable: no router reachable.
     """
     from space.client import TripleSpace
