@@ -5,18 +5,23 @@ the reasoner (`ac:current_task` written by rules). As in the paper, the task in
 the space wins: whatever the automaton was doing, a task the rules set becomes
 its task. The automaton adds what rules do not say: where each task goes, the
 power cycle GoingToDock -> Docking -> Charging -> back to the interrupted work,
-and how long the current task has run.
+taking a postponed task up again once the robot is free, and how long the
+current task has run.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 POWER_TASKS = ("GoingToDock", "Docking", "Charging")
 WORK_TASKS = ("AttendingPatient", "Guiding")
 # Work that makes sense to resume after charging; a guided person will not have waited.
 RESUMABLE = ("AttendingPatient",)
+LOW_BATTERY = ("low", "very low")
 DOCKING_TIME = 5.0
+# Idle this long before a postponed task is taken up again: not at once, or a task
+# postponed for taking too long would start over in the same breath.
+RETRY_AFTER = 300.0
 
 
 @dataclass(frozen=True)
@@ -36,6 +41,8 @@ class Situation:
         elapsed: `ac:task_elapsed` in the space (to resume the count after a restart).
         resume: type of `ac:resume_task` in the space (the work to resume after
             charging, for an automaton that restarted meanwhile).
+        postponed: type of a task the robot postponed, that a person waits for.
+        postponed_room: room of that person.
     """
 
     now: float
@@ -49,6 +56,8 @@ class Situation:
     guide_destination: str | None = None
     elapsed: float | None = None
     resume: str | None = None
+    postponed: str | None = None
+    postponed_room: str | None = None
 
 
 @dataclass(frozen=True)
@@ -62,6 +71,8 @@ class Plan:
         resume: type of the work task to resume after charging, if any.
         elapsed: simulated seconds the task has run.
         take_request: whether the user's request was handled (remove it).
+        take_postponed: whether the postponed task was handled: taken up again (it is
+            `task`) or, if it cannot be resumed, given up.
     """
 
     task: str
@@ -70,13 +81,17 @@ class Plan:
     resume: str | None
     elapsed: float
     take_request: bool
+    take_postponed: bool = False
 
 
 class TaskAutomaton:
     """Follows the task in the space and drives the power cycle; see the module docstring."""
 
-    def __init__(self, docking_time: float = DOCKING_TIME) -> None:
+    def __init__(
+        self, docking_time: float = DOCKING_TIME, retry_after: float = RETRY_AFTER
+    ) -> None:
         self.docking_time = docking_time
+        self.retry_after = retry_after
         self.task: str | None = None
         self.started = 0.0
         self.resume: str | None = None
@@ -95,6 +110,10 @@ class TaskAutomaton:
                 self.resume = s.requested
             elif s.requested != self.task:
                 self._enter(s.requested, s.now)
+        take_postponed = self._free_for_postponed(s)
+        if take_postponed and s.postponed in RESUMABLE:
+            self._enter(s.postponed, s.now)
+            s = replace(s, person_room=s.postponed_room)
         self._advance(s)
         return Plan(
             task=self.task or "Idle",
@@ -103,6 +122,17 @@ class TaskAutomaton:
             resume=self.resume,
             elapsed=max(0.0, s.now - self.started),
             take_request=s.requested is not None,
+            take_postponed=take_postponed,
+        )
+
+    def _free_for_postponed(self, s: Situation) -> bool:
+        """Return True if a postponed task can be handled: idle a while, nothing asked, charged."""
+        return (
+            s.postponed is not None
+            and self.task == "Idle"
+            and s.requested is None
+            and s.battery not in LOW_BATTERY
+            and s.now - self.started >= self.retry_after
         )
 
     def _enter(self, task: str, since: float) -> None:

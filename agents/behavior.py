@@ -4,9 +4,11 @@ It reads the task the rules or a user set (`ac:current_task`,
 `ac:requested_task`), and writes what follows from it: where the robot must go
 (`ac:target_place`, which the nav monitor obeys), whom it serves
 (`ac:interacting_with`, which interaction rules adapt to), the power cycle
-(GoingToDock -> Docking -> Charging -> back to work, `ac:resume_task`), and how
+(GoingToDock -> Docking -> Charging -> back to work, `ac:resume_task`), how
 long the task has run (`ac:task_started`, `ac:task_elapsed`, which the "task
-takes too long" rule watches). See `agents.automaton` for the decisions.
+takes too long" rule watches), and re-planning: a task that rule postponed
+(`P ac:waiting_for T ; ac:postponed_by R`) is taken up again, for its person,
+once the robot is free. See `agents.automaton` for the decisions.
 """
 
 from __future__ import annotations
@@ -20,8 +22,8 @@ from decimal import Decimal
 from rdflib import Literal, URIRef
 from rdflib.term import Node
 
-from agents.automaton import DOCKING_TIME, Plan, Situation, TaskAutomaton
-from agents.base import Agent, run_agent
+from agents.automaton import DOCKING_TIME, RETRY_AFTER, Plan, Situation, TaskAutomaton
+from agents.base import Agent, local_name, run_agent
 from agents.view import AC
 
 
@@ -32,7 +34,7 @@ class Behavior(Agent):
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)
-        self.automaton = TaskAutomaton(args.docking_time)
+        self.automaton = TaskAutomaton(args.docking_time, args.retry_after)
         self._task: str | None = None
         self._elapsed_written = 0.0
 
@@ -53,13 +55,27 @@ class Behavior(Agent):
             metavar="SECONDS",
             help="granularity of ac:task_elapsed, simulated seconds (default 5)",
         )
+        parser.add_argument(
+            "--retry-after",
+            type=float,
+            default=RETRY_AFTER,
+            metavar="SECONDS",
+            help="simulated seconds idle before a postponed task is taken up again "
+            f"(default {RETRY_AFTER:g})",
+        )
 
     def tick(self) -> None:
         """Step the automaton on the current view and write what it decided."""
-        plan = self.automaton.step(self._situation())
-        self.set_values(self._values(plan))
+        waiting = self._waiting()
+        plan = self.automaton.step(self._situation(waiting))
+        self.set_values(self._values(plan, waiting))
 
-    def _situation(self) -> Situation:
+    def _waiting(self) -> URIRef | None:
+        """Return a person waiting for a task this robot postponed (the first by name)."""
+        people = sorted(self.view.graph.subjects(AC.postponed_by, self.robot))
+        return next((p for p in people if isinstance(p, URIRef)), None)
+
+    def _situation(self, waiting: URIRef | None) -> Situation:
         v, robot = self.view, self.robot
         person = v.value(robot, AC.attended_person)
         return Situation(
@@ -74,14 +90,24 @@ class Behavior(Agent):
             guide_destination=_name(v.value(robot, AC.guide_destination)),
             elapsed=v.number(robot, AC.task_elapsed),
             resume=v.task_type(v.value(robot, AC.resume_task)),
+            postponed=v.task_type(v.value(waiting, AC.waiting_for)),
+            postponed_room=_name(v.value(waiting, AC.room)),
         )
 
-    def _values(self, plan: Plan) -> dict[tuple[Node, Node], Node | None]:
+    def _values(self, plan: Plan, waiting: URIRef | None) -> dict[tuple[Node, Node], Node | None]:
         robot = self.robot
         task = self.view.task_of_type(plan.task)
         resume = self.view.task_of_type(plan.resume) if plan.resume else None
         person = self.view.value(robot, AC.attended_person) if plan.interacting else None
-        values: dict[tuple[Node, Node], Node | None] = {
+        values: dict[tuple[Node, Node], Node | None]
+        if plan.take_postponed and waiting is not None:
+            values = self._take_postponed(plan, waiting)
+            person = values.get((robot, AC.attended_person), person)
+        elif person is not None and (person, AC.postponed_by, robot) in self.view.graph:
+            values = self._settled(person)  # served again: no longer waiting
+        else:
+            values = {}
+        values |= {
             (robot, AC.target_place): URIRef(plan.target) if plan.target else None,
             (robot, AC.interacting_with): person,
             (robot, AC.resume_task): resume,
@@ -98,6 +124,38 @@ class Behavior(Agent):
             values.update(self._elapsed(plan.elapsed))
         elif time.monotonic() - self._elapsed_written >= 1.0:
             values.update(self._elapsed(plan.elapsed))
+        return values
+
+    def _take_postponed(self, plan: Plan, waiting: URIRef) -> dict[tuple[Node, Node], Node | None]:
+        """Return what taking a postponed task up (or giving it up) writes, and log it."""
+        postponed = self.view.task_type(self.view.value(waiting, AC.waiting_for))
+        values = self._settled(waiting)
+        if plan.task == postponed:
+            self.log.info("taking up the postponed %s for %s", postponed, local_name(waiting))
+            values[(self.robot, AC.attended_person)] = waiting
+        else:
+            self.log.info(
+                "giving up the postponed %s for %s: it cannot be resumed",
+                postponed,
+                local_name(waiting),
+            )
+        return values
+
+    def _settled(self, person: Node) -> dict[tuple[Node, Node], Node | None]:
+        """Return the removal of a person's postponed task, and of the robot's record of it."""
+        v, robot = self.view, self.robot
+        others = {
+            t
+            for p in v.graph.subjects(AC.postponed_by, robot)
+            if p != person
+            for t in v.graph.objects(p, AC.waiting_for)
+        }
+        values: dict[tuple[Node, Node], Node | None] = {
+            (person, AC.waiting_for): None,
+            (person, AC.postponed_by): None,
+        }
+        if len(others) <= 1:  # the robot's record can only be set to one value or none
+            values[(robot, AC.postponed_task)] = next(iter(others), None)
         return values
 
     def _elapsed(self, elapsed: float) -> dict[tuple[Node, Node], Node | None]:

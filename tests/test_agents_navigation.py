@@ -97,6 +97,42 @@ def test_kill_9_behavior_keeps_counting_the_task_time(robot, launch):
     assert state(robot, AC.current_task) == AC.task_guiding
 
 
+def test_a_visit_postponed_for_taking_too_long_is_taken_up_again_for_the_same_patient(
+    robot, launch
+):
+    reasoner = launch.start("reasoner")
+    wait_for(lambda: "loaded" in reasoner.logs(), 30, "the reasoner", reasoner.logs)
+    behavior = launch.start("behavior", "--time-scale", "100", "--retry-after", "60")
+    robot.write(
+        [
+            (AC.robot1_battery, AC.battery_level, Literal("low")),
+            (AC.robot1, AC.attended_person, AC.patient_ane),
+            (AC.robot1, AC.requested_task, AC.task_attending_patient),
+        ]
+    )
+    wait_for(lambda: state(robot, AC.interacting_with) == AC.patient_ane, 15)
+    # 600 simulated seconds (6 s here) later the visit is overdue: the rules postpone it.
+    wait_for(lambda: state(robot, AC.waiting_for, AC.patient_ane) is not None, 30)
+    assert state(robot, AC.waiting_for, AC.patient_ane) == AC.task_attending_patient
+    assert state(robot, AC.postponed_by, AC.patient_ane) == AC.robot1
+    assert "took too long" in str(state(robot, AC.announcement))
+    assert state(robot, AC.current_task) == AC.task_idle
+    # Meanwhile someone else asks for the robot: Ane's attended_person is overwritten.
+    robot.write([(AC.robot1, AC.attended_person, AC.visitor_miren)])
+    # Idle for longer than --retry-after, but the battery is low: the visit waits.
+    wait_for(lambda: float(state(robot, AC.task_elapsed) or 0) < 100, 15, "the idle count")
+    wait_for(lambda: float(state(robot, AC.task_elapsed) or 0) >= 100, 15)
+    assert state(robot, AC.current_task) == AC.task_idle
+    assert "taking up" not in behavior.logs()
+    robot.write([(AC.robot1_battery, AC.battery_level, Literal("normal"))])
+    wait_for(lambda: state(robot, AC.current_task) == AC.task_attending_patient, 15)
+    assert state(robot, AC.attended_person) == AC.patient_ane
+    assert state(robot, AC.target_place) == AC.room_101
+    assert state(robot, AC.waiting_for, AC.patient_ane) is None
+    assert state(robot, AC.postponed_task) is None
+    assert "taking up the postponed AttendingPatient for patient_ane" in behavior.logs()
+
+
 def test_tspace_agent_runs_an_agent(robot, server, space_name, tmp_path):
     launcher = Launcher(server.endpoint, space_name, tmp_path)
     proc = AgentProcess("nav_monitor", server.endpoint, space_name, tmp_path)

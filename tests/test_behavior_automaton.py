@@ -1,4 +1,4 @@
-from agents.automaton import DOCKING_TIME, Situation, TaskAutomaton
+from agents.automaton import DOCKING_TIME, RETRY_AFTER, Situation, TaskAutomaton
 
 
 def at(now, **kw):
@@ -90,3 +90,26 @@ def test_a_restart_while_charging_still_resumes_the_interrupted_work():
     assert plan.resume == "AttendingPatient"
     plan = restarted.step(at(5, task="Charging", battery="full", person_room="room_101"))
     assert (plan.task, plan.target) == ("AttendingPatient", "room_101")
+
+
+def test_a_postponed_patient_is_attended_again_once_the_robot_is_free():
+    automaton = TaskAutomaton()
+    automaton.step(at(0, task="AttendingPatient", person_room="room_101"))
+    waiting = {"postponed": "AttendingPatient", "postponed_room": "room_102"}
+    # The rules postponed the visit: the robot is idle, and stays so for a while.
+    plan = automaton.step(at(600, task="Idle", **waiting))
+    assert (plan.task, plan.take_postponed) == ("Idle", False)
+    # A low battery, or a new request, comes first.
+    plan = automaton.step(at(600 + RETRY_AFTER, task="Idle", battery="low", **waiting))
+    assert (plan.task, plan.take_postponed) == ("Idle", False)
+    plan = automaton.step(at(601 + RETRY_AFTER, task="Idle", battery="normal", **waiting))
+    assert (plan.task, plan.target, plan.interacting) == ("AttendingPatient", "room_102", True)
+    assert plan.take_postponed
+
+
+def test_a_postponed_guiding_is_given_up_not_resumed():
+    automaton = TaskAutomaton(retry_after=10)
+    plan = automaton.step(at(0, task="Idle", postponed="Guiding", postponed_room="hall"))
+    assert plan.take_postponed is False
+    plan = automaton.step(at(10, task="Idle", postponed="Guiding", postponed_room="hall"))
+    assert (plan.task, plan.take_postponed) == ("Idle", True)

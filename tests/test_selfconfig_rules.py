@@ -92,14 +92,22 @@ def test_other_work_goes_on_with_a_low_battery(robot):
     assert robot.get(AC.robot1, AC.current_task) == AC.task_attending_patient
 
 
-def test_a_task_taking_too_long_is_postponed_and_announced(robot):
+def test_a_task_taking_too_long_is_postponed_for_its_person_and_announced(robot):
     robot.set(AC.robot1, AC.current_task, AC.task_attending_patient)
+    robot.set(AC.robot1, AC.interacting_with, AC.patient_ane)
     robot.set(AC.robot1, AC.task_elapsed, Literal(595))
     assert robot.get(AC.robot1, AC.current_task) == AC.task_attending_patient
     robot.set(AC.robot1, AC.task_elapsed, Literal(605))
     assert robot.get(AC.robot1, AC.current_task) == AC.task_idle
     assert robot.get(AC.robot1, AC.postponed_task) == AC.task_attending_patient
+    # Kept with the patient, not only on the task every robot shares: whoever the robot
+    # serves next, this visit is still Ane's.
+    assert robot.get(AC.patient_ane, AC.waiting_for) == AC.task_attending_patient
+    assert robot.get(AC.patient_ane, AC.postponed_by) == AC.robot1
     assert "AttendingPatient took too long" in str(robot.get(AC.robot1, AC.announcement))
+    robot.set(AC.robot1, AC.interacting_with, AC.patient_jon)
+    assert robot.get(AC.patient_ane, AC.waiting_for) == AC.task_attending_patient
+    assert robot.get(AC.patient_jon, AC.waiting_for) is None
 
 
 def test_going_to_the_dock_is_never_postponed(robot):
@@ -143,6 +151,16 @@ def test_a_motor_error_disables_navigation_until_it_is_repaired(robot):
     assert robot.get(AC.robot1_navigation, AC.skill_status) == Literal("enabled")
     assert modes(robot, *NAVIGATION_ACTUATORS) == ["active"] * 2
     assert (AC.robot1_wheels, RDF.type, AC.FaultyDevice) not in robot.engine.graph
+    said = str(robot.get(AC.robot1, AC.announcement))
+    assert "cannot move" not in said
+    assert said == "My wheel motors work again: I can move."
+
+
+def test_a_newer_announcement_is_not_replaced_when_the_motor_is_repaired(robot):
+    robot.set(AC.robot1_wheels, AC.fault, Literal("error"))
+    robot.set(AC.robot1, AC.announcement, Literal("Visiting hours are over."))
+    robot.set(AC.robot1_wheels, AC.fault, Literal("none"))
+    assert robot.get(AC.robot1, AC.announcement) == Literal("Visiting hours are over.")
 
 
 # 4. Software
