@@ -76,8 +76,8 @@ class Server:
         self.proc: subprocess.Popen | None = None
         self.log = data_dir.parent / f"serve-{self.port}.log"
 
-    def start(self) -> None:
-        """Start the process and wait until a store answers."""
+    def start(self, *, wait: bool = True) -> None:
+        """Start the process and, with `wait`, wait until a store answers through it."""
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(
                 tspace_cmd(
@@ -87,7 +87,8 @@ class Server:
                 stderr=subprocess.STDOUT,
                 start_new_session=True,
             )
-        wait_for(self._answers, 20, f"tspace serve on {self.endpoint}")
+        if wait:
+            wait_for(self._answers, 20, f"tspace serve on {self.endpoint}")
 
     def reachable(self) -> bool:
         """Return True when a store answers through this process's router."""

@@ -16,7 +16,7 @@ from netns import Host, Network, Proc, require_netns
 from rdflib import Literal, Namespace
 
 from conftest import AC_NS, wait_for
-from space import TripleSpace
+from space import SpaceError, TripleSpace
 
 pytestmark = pytest.mark.netns
 
@@ -47,6 +47,15 @@ def counted(ts: TripleSpace) -> set[int]:
     return {int(o) for o in ts.query((AC.counter, AC.n, None), timeout=10).objects()}
 
 
+def answers(ts: TripleSpace) -> bool:
+    """Return True once a store answers `ts` (within a second)."""
+    try:
+        ts.snapshot(timeout=1.0)
+    except SpaceError:
+        return False
+    return True
+
+
 def write(ts: TripleSpace, numbers: range) -> None:
     for i in numbers:
         # Acknowledged: durable at the leader and held by the follower.
@@ -67,16 +76,20 @@ def test_a_stores_host_lost_and_back_loses_nothing_and_catches_up(net):
         taken_over = time.monotonic() - started
         assert counted(ts) == set(range(30))
 
-        # s1 comes back with its disk: it follows s2 and fetches the 10 changes it missed.
+        # s1 comes back with its disk and follows s2. Nothing is written from now on until
+        # s1 answered: the 10 changes it missed reach it only by its own catch-up.
         s1.restore()
         log = (s1.net.workdir / "s1-serve.log").read_text(errors="replace")
         returned = s1.serve(connect=[s2])
         wait_following(returned, len(log))
-        write(ts, range(30, 35))
 
-        # Now s2's host goes: s1 alone answers, with every change, in one sequence.
+        # Now s2's host goes: s1 alone answers, through its own router, with every change.
         lose(s2)
-        write(ts, range(35, 40))
+        with TripleSpace.open(s1.control, space=SPACE) as direct:
+            wait_for(lambda: answers(direct), 30, "s1 to take over")
+            assert counted(direct) == set(range(30))
+            assert direct.snapshot(timeout=10)[1] == 30
+        write(ts, range(30, 40))
         assert counted(ts) == set(range(40))
         assert ts.snapshot(timeout=10)[1] == 40
     assert taken_over < 25, f"the follower took {taken_over:.1f} s to take over"

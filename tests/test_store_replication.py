@@ -5,13 +5,21 @@ import signal
 from rdflib import Literal, Namespace
 
 from conftest import AC_NS, Server, store_answers, wait_for
-from space import TripleSpace
+from space import SpaceUnavailable, TripleSpace
 
 AC = Namespace(AC_NS)
 
 
 def _counted(ts: TripleSpace) -> set[int]:
     return {int(o) for o in ts.query((AC.counter, AC.n, None)).objects()}
+
+
+def opened(endpoint: str) -> TripleSpace | None:
+    """Return a client of the router at `endpoint`, None while it does not listen yet."""
+    try:
+        return TripleSpace.open(endpoint, space="rep")
+    except SpaceUnavailable:
+        return None
 
 
 def leader_and_follower(tmp_path, *leader_args: str) -> tuple[Server, Server]:
@@ -117,3 +125,48 @@ def test_a_store_that_led_alone_gives_up_its_own_changes_for_the_leaders(tmp_pat
     finally:
         b.stop()
         a.stop()
+
+
+def test_a_store_that_cannot_catch_up_stays_silent_and_never_takes_over(tmp_path):
+    """A returning store sees a leader whose log it cannot reach: it must not pass for a copy."""
+    a, b = leader_and_follower(tmp_path)
+    router = Server(tmp_path / "router", "--no-store")
+    try:
+        with TripleSpace.open(a.endpoint, space="rep") as ts:
+            ts.write([(AC.counter, AC.n, Literal(0))])
+            b.stop()
+            for i in range(1, 10):  # b misses these
+                ts.write([(AC.counter, AC.n, Literal(i))])
+        a.stop(signal.SIGKILL)
+
+        # b comes back to a router where a leader is announced but nothing answers for it.
+        router.start(wait=False)
+        with wait_for(lambda: opened(router.endpoint), 20, "the router") as watcher:
+            live = watcher.session.liveliness()
+            fake = live.declare_token("tspace/@leader/0")
+            since = len(b.logs())
+            b.extra = ("--connect", router.endpoint)
+            b.start(wait=False)
+            asked = "could not ask the leader for its spaces"
+            wait_for(lambda: asked in b.logs()[since:], 30, "b to try to catch up")
+            assert not list(live.get("tspace/@stores/*", timeout=1.0)), "b announced itself"
+
+            fake.undeclare()  # its leader is gone: b, behind, must not lead
+            decided = ("not taking over", "leads")
+            wait_for(lambda: any(x in b.logs()[since:] for x in decided), 10, "b to decide")
+            assert "leads" not in b.logs()[since:]
+            assert not store_answers(router.endpoint)
+
+            # The real leader is back: b catches up, then announces itself.
+            a.extra = ("--connect", router.endpoint)
+            a.start()
+            wait_for(lambda: "follows" in b.logs()[since:], 30, "b to catch up")
+            a.stop(signal.SIGKILL)
+        wait_for(lambda: store_answers(b.endpoint), 20, "b to take over")
+        with TripleSpace.open(b.endpoint, space="rep") as ts:
+            assert _counted(ts) == set(range(10))
+            assert ts.snapshot()[1] == 10
+    finally:
+        for server in (b, a, router):
+            if server.proc is not None:
+                server.stop()

@@ -8,7 +8,10 @@ after, as whole changesets and as per-triple keys.
 Several stores may hold the same spaces (see docs/deployment.md): the one
 alive the longest leads (sequences writes, answers reads); the others follow
 the leader's changes, and the follower with the smallest Zenoh id takes over
-when the leader's liveliness token goes away.
+when the leader's liveliness token goes away. A follower announces itself
+(`@stores/<zid>`: acknowledged as a replica, a candidate to take over) only
+once it has caught up with the leader; one that could not stays silent and
+retries.
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ log = logging.getLogger("tspace.store")
 
 _BATCH = 256
 HEARTBEAT = 0.5  # seconds between publications of each space's sequence number
+CATCH_UP_RETRY = 1.0  # seconds between a follower's attempts to catch up with the leader
 _SERVICES = ("write", "query", "log", "keys")
 
 
@@ -81,6 +85,7 @@ class StoreServer:
         self._role_entities: list = []
         self._token: zenoh.LivelinessToken | None = None
         self._stores: set[str] = set()
+        self._behind_until: float | None = None  # a follower behind: when to try again
         self._acks = AckGate()
         self._graph_publishers: dict[tuple[str, str], zenoh.Publisher] = {}
         self._db: StoreDB | None = None
@@ -91,7 +96,8 @@ class StoreServer:
     def start(self, timeout: float = 10.0) -> None:
         """Load every space from the database, find the leader or lead, then serve.
 
-        Blocks until this store leads or has caught up with the leader.
+        Blocks until this store leads or has caught up with the leader, or for
+        `timeout` seconds (a follower behind goes on trying in the background).
         """
         self._db = StoreDB(self.data_dir, durable=self.durable, log_keep=self.log_keep)
         self._replica = Replica(self.session, self.root, self._db, self._space, self._forget)
@@ -166,9 +172,10 @@ class StoreServer:
 
     def _run(self) -> None:
         self._decide_role()
-        self._ready.set()
         next_beat = time.monotonic()
         while True:
+            if self._behind_until is not None and time.monotonic() >= self._behind_until:
+                self._catch_up()
             if time.monotonic() >= next_beat:
                 self._heartbeat()
                 next_beat = time.monotonic() + HEARTBEAT
@@ -222,8 +229,10 @@ class StoreServer:
             if result is not None:
                 commits.append(result[1])
         self._flush(pending, commits)
-        if replicas and self.role == "following":
-            self._replica.follow([(r.space, r.payload or b"") for r in replicas])
+        # A follower behind ignores them: its next catch-up fetches them from the log.
+        if replicas and self.role == "following" and self._behind_until is None:
+            if not self._replica.follow([(r.space, r.payload or b"") for r in replicas]):
+                self._fall_behind()
 
     def _flush(self, pending: list, commits: list[Commit]) -> None:
         if not pending:
@@ -415,8 +424,10 @@ class StoreServer:
             ]
         )
         self.role, self.leader = "leading", self.zid
+        self._behind_until = None
         self._acks.followers = self._stores - {self.zid}
         self._announce()
+        self._ready.set()
         log.info("store %s leads", self.zid)
 
     def _follow(self, leader: str) -> None:
@@ -424,9 +435,34 @@ class StoreServer:
         self._declare_role([self.session.declare_subscriber(changes, self._on_sample("replica"))])
         self.role, self.leader = "following", leader
         self._acks.followers = set()
-        self._replica.catch_up()
+        self._silence()  # a leader stepping down is not a replica until it has caught up
+        self._catch_up()
+
+    def _catch_up(self) -> None:
+        """Fetch what this store missed from the leader; announce it then, or retry later."""
+        if not self._replica.catch_up():
+            self._fall_behind()
+            return
+        self._behind_until = None
         self._announce()
-        log.info("store %s follows %s", self.zid, leader)
+        self._ready.set()
+        log.info("store %s follows %s", self.zid, self.leader)
+
+    def _fall_behind(self) -> None:
+        """Stay silent (no replica, no candidate to lead) and try to catch up again soon."""
+        if self._behind_until is None:
+            log.warning(
+                "store %s could not catch up with the leader: silent, retrying every %g s",
+                self.zid,
+                CATCH_UP_RETRY,
+            )
+        self._silence()
+        self._behind_until = time.monotonic() + CATCH_UP_RETRY
+
+    def _silence(self) -> None:
+        if self._token is not None:
+            self._token.undeclare()
+            self._token = None
 
     def _announce(self) -> None:
         if self._token is None:
@@ -451,6 +487,10 @@ class StoreServer:
             elif self.role == "following":
                 self.leader = zid
         elif not alive and zid == self.leader and self.role == "following":
+            if self._behind_until is not None:
+                # Its copy may lack acknowledged changes: no answer beats a wrong one.
+                log.error("leader %s is gone before this store caught up: not taking over", zid)
+                return
             candidates = sorted((self._stores - {zid}) | {self.zid})
             if candidates[0] == self.zid:
                 log.warning("leader %s is gone; store %s takes over", zid, self.zid)
