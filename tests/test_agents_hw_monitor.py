@@ -82,6 +82,22 @@ def test_a_simulated_motor_fault_is_reported_and_cleared(robot, launch):
     wait_for(lambda: value(robot, AC.robot1_wheels, AC.fault) == Literal("none"))
 
 
+def test_the_motor_failure_announcement_is_replaced_once_the_motor_works(robot, launch):
+    reasoner = launch.start("reasoner")
+    wait_for(lambda: "loaded" in reasoner.logs(), 30, "the reasoner", reasoner.logs)
+    launch.start("hw_monitor")
+    wait_for(lambda: value(robot, AC.robot1_wheels, AC.actual_mode) == Literal("active"))
+    robot.write([(AC.robot1_wheels, AC.simulate_fault, Literal("error"))])
+    wait_for(lambda: "wheel motor failed" in str(value(robot, AC.robot1, AC.announcement)))
+    assert value(robot, AC.robot1_navigation, AC.skill_status) == Literal("disabled")
+    robot.write([(AC.robot1_wheels, AC.simulate_fault, Literal("none"))])
+    wait_for(lambda: value(robot, AC.robot1_navigation, AC.skill_status) == Literal("enabled"))
+    wait_for(lambda: value(robot, AC.robot1, AC.announcement) is not None)
+    assert value(robot, AC.robot1, AC.announcement) == Literal(
+        "My wheel motors work again: I can move."
+    )
+
+
 def test_the_laser_reports_crowds_where_the_robot_is(robot, launch):
     launch.start("hw_monitor")
     wait_for(lambda: value(robot, AC.robot1_laser, AC.obstacles) == Literal("clear"))
