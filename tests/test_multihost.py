@@ -1,10 +1,10 @@
 """One space over several hosts: routers meshed across network namespaces (`tests/netns.py`).
 
-Host `a` runs `tspace serve` (router + store), `b` a router with robot1's
-agents, `c` a router with the reasoners, `d` a router with a robot that
-vanishes. Every router is configured as docs/deployment.md says, every agent
-is a client of its own host's router, and the test reaches each host through
-its router's control socket.
+Host `a` runs `tspace serve` (router + store) and the fleet monitor, `b` a
+router with a robot's agents, `c` a router with the reasoners, `d` a router
+with a robot that vanishes. Every router is configured as docs/deployment.md
+says, every agent is a client of its own host's router, and the test reaches
+each host through its router's control socket.
 """
 
 from __future__ import annotations
@@ -188,26 +188,45 @@ def test_a_cut_link_loses_no_change(net):
         assert state(cut_ts) == state(ref_ts)
 
 
-def test_a_robot_whose_host_vanishes_is_gone_and_its_patient_handed_over(net):
-    a, c, d = net["a"], net["c"], net["d"]
-    robot = knowledge()
-    robot.set((AC.robot1, AC.current_task, AC.task_attending_patient))
-    robot.add((AC.robot1, AC.attended_person, AC.patient_ane))
-    space = new_space(a, robot)
+def fleet_space(host: Host) -> str:
+    """Make a space with two hospital robots: robot1 charging on dock 1, Ane waiting for it."""
+    fleet = Graph().parse(REPO / "ontology" / "selfconfig.ttl")
+    for name in ("common.ttl", "hospital_fleet.ttl"):
+        fleet.parse(REPO / "ontology" / "robots" / name)
+    robot1 = {
+        AC.current_task: AC.task_charging,
+        AC.dock: AC.dock1,
+        AC.location: AC.dock1,
+        AC.position_x: Literal(0.0),
+        AC.position_y: Literal(0.0),
+        AC.attended_person: AC.patient_ane,  # asked for while charging: it goes after
+        AC.resume_task: AC.task_attending_patient,
+    }
+    for predicate, value in robot1.items():
+        fleet.set((AC.robot1, predicate, value))
+    fleet.set((AC.dock1, AC.dock_status, Literal("occupied")))
+    fleet.set((AC.robot1_battery, AC.charge_percent, Literal(20)))
+    fleet.set((AC.robot1_battery, AC.battery_level, Literal("low")))
+    return new_space(host, fleet)
+
+
+def test_a_robot_whose_host_vanishes_is_gone_and_the_fleet_takes_back_its_patient_and_dock(net):
+    a, b, c, d = net["a"], net["b"], net["c"], net["d"]
+    space = fleet_space(a)
     seen: list[Change] = []
     with TripleSpace.open(a.control, space=space) as ts:
         ts.subscribe(None, seen.append)
         rules = [
-            x
-            for name in ("selfconfig", "presence")
-            for x in ("--rules", str(RULES / f"{name}.rules"))
+            x for name in ("fleet", "presence") for x in ("--rules", str(RULES / f"{name}.rules"))
         ]
         start_reasoner(c, seen, space, *rules)
         a.agent("fleet_monitor", space=space)
         for kind in ROBOT_AGENTS:
-            d.agent(kind, space=space, robot="robot1")
-        present = (AC.robot1, AC.presence, Literal("present"))
-        wait_for(lambda: present in ts.match(present), 60, "robot1 present")
+            d.agent(kind, space=space, robot="robot1")  # robot1's host: it will vanish
+            b.agent(kind, space=space, robot="robot2")
+        for robot in (AC.robot1, AC.robot2):
+            present = (robot, AC.presence, Literal("present"))
+            wait_for(lambda t=present: t in ts.match(t), 60, f"{robot} present")
         attending = (AC.robot1, AC.attended_person, AC.patient_ane)
         assert attending in ts.match(attending)
 
@@ -229,13 +248,22 @@ def test_a_robot_whose_host_vanishes_is_gone_and_its_patient_handed_over(net):
         mark = wait_for(marked_gone, 10, "the fleet monitor marking robot1 gone")
         assert time.monotonic() - vanished > 5  # the lease, not a goodbye, told the others
 
-        def handed_over() -> Change | None:
-            over = (AC.patient_ane, AC.handed_over_by, AC.robot1)
-            return next((ch for ch in seen if ch.agent == "reasoner" and over in ch.added), None)
+        def answer() -> Change | None:
+            return next((ch for ch in seen if ch.agent == "reasoner" and ch.cause == mark.id), None)
 
-        answer = wait_for(handed_over, 10, "the rules handing robot1's patient over")
-        assert answer.cause == mark.id
-        assert attending in answer.removed
+        reaction = wait_for(answer, 10, "the fleet rules' answer to robot1 gone")
+        # Ane goes to robot2, dock 1 is free again: in one answer, caused by the mark.
+        assert attending in reaction.removed
+        assert (AC.robot2, AC.attended_person, AC.patient_ane) in reaction.added
+        assert (AC.robot2, AC.requested_task, AC.task_attending_patient) in reaction.added
+        assert (AC.robot1, AC.dock, AC.dock1) in reaction.removed
+        assert (AC.dock1, AC.dock_status, Literal("free")) in reaction.added
+
+        def robot2_attends() -> bool:
+            task = (AC.robot2, AC.current_task, AC.task_attending_patient)
+            return any(ch.agent == "behavior.robot2" and task in ch.added for ch in seen)
+
+        wait_for(robot2_attends, 10, "robot2's behaviour on b taking Ane over")
 
 
 def test_changes_written_during_a_cut_longer_than_the_lease_arrive(net):
