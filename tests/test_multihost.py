@@ -188,6 +188,64 @@ def test_a_cut_link_loses_no_change(net):
         assert state(cut_ts) == state(ref_ts)
 
 
+def test_a_cut_hosts_latest_sensor_values_arrive_and_are_reasoned_on_after_the_cut(net):
+    """The cut host's own writes fail during the cut; its agents re-send their latest state."""
+    a, b, c = net["a"], net["b"], net["c"]
+    robot = knowledge()
+    robot.remove((AC.robot1_battery, AC.charge_percent, None))  # so that --charge applies
+    space = new_space(a, robot)
+    seen: list[Change] = []
+    arrived: dict[str, float] = {}
+    battery = AC.robot1_battery
+
+    def record(change: Change) -> None:
+        arrived[change.id] = time.monotonic()
+        seen.append(change)
+
+    with TripleSpace.open(a.control, space=space) as ts:
+        ts.subscribe(None, record)
+        start_reasoner(c, seen, space)
+        # 24 % draining about 5.6 % a second: 20, 15, 10, 5 (very low: the dock), then 0,
+        # all but the first reading while b's link is cut.
+        b.agent(
+            "hw_monitor",
+            space=space,
+            robot="robot1",
+            args=["--charge", "24", "--time-scale", "230"],
+        )
+
+        def read(percent: int) -> bool:
+            t = (battery, AC.charge_percent, Literal(percent))
+            return any(ch.agent == "hw_monitor.robot1" and t in ch.added for ch in seen)
+
+        wait_for(lambda: read(20), 60, "robot1's first battery reading")
+        with b.outage(5.0):
+            cut = time.monotonic()
+        restored = time.monotonic()
+        from_b = [ch.id for ch in seen if ch.agent == "hw_monitor.robot1"]
+        assert not [i for i in from_b if cut < arrived[i] < restored], "a write crossed the cut"
+
+        very_low = (battery, AC.battery_level, Literal("very low"))
+
+        def reasoned() -> Change | None:
+            """Return the hw_monitor's very low reading once the reasoner answered it."""
+            hw = [ch for ch in seen if ch.agent == "hw_monitor.robot1" and very_low in ch.added]
+            going = (AC.robot1, AC.current_task, AC.task_going_to_dock)
+            answered = {ch.cause for ch in seen if ch.agent == "reasoner" and going in ch.added}
+            return next((ch for ch in hw if ch.id in answered), None)
+
+        reading = wait_for(reasoned, 15, "robot1's very low battery, reasoned on")
+        took = time.monotonic() - restored
+        assert arrived[reading.id] > restored, "the very low reading crossed the cut link"
+        # The latest reading, not one from the cut, is the space's (readings are functional).
+        wait_for(lambda: read(0), 10, "robot1's latest battery reading")
+        assert set(ts.match((battery, AC.charge_percent, None))) == {
+            (battery, AC.charge_percent, Literal(0))
+        }
+        assert set(ts.match((battery, AC.battery_level, None))) == {very_low}
+        assert took < 10, f"the cut host's latest state took {took:.1f} s to be reasoned on"
+
+
 def fleet_space(host: Host) -> str:
     """Make a space with two hospital robots: robot1 charging on dock 1, Ane waiting for it."""
     fleet = Graph().parse(REPO / "ontology" / "selfconfig.ttl")
