@@ -13,7 +13,8 @@ The test process stays in the root namespace and reaches each host's router
 through a Unix socket (paths cross namespaces, TCP does not): that is the
 host's `control` endpoint, unaffected by link cuts.
 
-Usage (needs root; `require_netns()` skips with the reason otherwise)::
+Usage (needs root; `require_netns()` skips with the reason otherwise, or fails
+when `TSPACE_REQUIRE_NETNS=1`, as `.ci/run` sets it)::
 
     with Network(["a", "b"], tmp_path) as net:
         net["a"].serve()                       # router + store
@@ -43,6 +44,7 @@ REPO = Path(__file__).resolve().parents[1]
 SUBNET = "10.47.0"  # only ever configured inside the namespaces made here
 PORT = 7447
 ROUTER_CONFIG = REPO / "deploy" / "multihost" / "router.json5"
+REQUIRE = "TSPACE_REQUIRE_NETNS"  # "1": a test that cannot make namespaces fails, not skips
 
 
 def netns_unavailable() -> str | None:
@@ -62,12 +64,19 @@ def netns_unavailable() -> str | None:
 
 
 def require_netns() -> None:
-    """Skip the calling test with the reason when namespaces cannot be made."""
+    """Skip the calling test with the reason when namespaces cannot be made.
+
+    With `TSPACE_REQUIRE_NETNS=1` in the environment (CI) it fails instead:
+    there, a skipped multi-host test would pass unnoticed.
+    """
     import pytest  # here: benchmarks use this module without pytest installed
 
     reason = netns_unavailable()
-    if reason is not None:
-        pytest.skip(reason)
+    if reason is None:
+        return
+    if os.environ.get(REQUIRE) == "1":
+        pytest.fail(f"{reason}, and {REQUIRE}=1 requires the multi-host tests to run")
+    pytest.skip(reason)
 
 
 def _ip(*args: str) -> None:
