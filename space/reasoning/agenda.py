@@ -40,8 +40,10 @@ class Agenda:
         self._seq += 1
         heapq.heappush(self._heap, (rule.order, -self._seq, rule, match))
 
-    def pop(self) -> Activation:
-        """Take the next activation (the caller checks it still holds)."""
+    def pop(self) -> Activation | None:
+        """Take the next activation (the caller checks it still holds), or None when empty."""
+        if not self._heap:
+            return None
         activation = heapq.heappop(self._heap)
         self._pending.discard((activation[0], activation[3][0]))
         return activation

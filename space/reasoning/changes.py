@@ -9,6 +9,11 @@ from space.terms import Triple
 
 JournalEntry = tuple[bool, T, tuple[int, tuple[T, ...]] | None]
 
+# (was present, was asserted), indexed by the two tests: no new pair per touch.
+_STATES = (((False, False), (False, True)), ((True, False), (True, True)))
+_ASSERTED, _INFERRED = Origin.ASSERTED, Origin.INFERRED
+_new_change = tuple.__new__  # Change(...) without NamedTuple's Python-level __new__
+
 
 class ChangeLog:
     """Remember, for each triple an update touches, whether it was present and asserted before.
@@ -20,6 +25,7 @@ class ChangeLog:
     def __init__(self, terms: TermTable, store: TripleStore, asserted: set[T]) -> None:
         self._terms = terms
         self._store = store
+        self._triples = store.triples
         self._asserted = asserted
         self._before: dict[T, tuple[bool, bool]] = {}
         self._expected: dict[T, bool] = {}
@@ -34,8 +40,9 @@ class ChangeLog:
 
     def touch(self, t: T) -> None:
         """Note the state of a triple before the update first changes it."""
-        if t not in self._before:
-            self._before[t] = (t in self._store.triples, t in self._asserted)
+        before = self._before
+        if t not in before:
+            before[t] = _STATES[t in self._triples][t in self._asserted]
 
     def delta(self, firings: tuple[Firing, ...]) -> Delta:
         """Return the net change since `begin`."""
@@ -43,22 +50,22 @@ class ChangeLog:
         removed: list[Change] = []
         by_rules: tuple[list[Triple], list[Triple]] = ([], [])
         inferred: tuple[list[Triple], list[Triple]] = ([], [])
-        functors, triples, asserted = self._terms.functors, self._store.triples, self._asserted
-        decode = self._terms.triple
+        functors, triples, asserted = self._terms.functors, self._triples, self._asserted
+        expected, decode = self._expected, self._terms.triple
         for t, (was_present, was_asserted) in self._before.items():
-            if t[2] in functors:
-                continue
             is_present, is_asserted = t in triples, t in asserted
             # Checked before the net change: a caller's triple that rules took
             # away in the same update (a loaded one, say) is no net change, but
             # the caller must be told, or it keeps the triple.
-            by_rule = is_asserted != self._expected.get(t, was_asserted)
+            by_rule = is_asserted != expected.get(t, was_asserted)
             if is_present == was_present and is_asserted == was_asserted and not by_rule:
+                continue
+            if t[2] in functors:
                 continue
             triple = decode(t)
             if is_present != was_present:
                 now = is_asserted if is_present else was_asserted
-                change = Change(triple, Origin.ASSERTED if now else Origin.INFERRED)
+                change = _new_change(Change, (triple, _ASSERTED if now else _INFERRED))
                 (added if is_present else removed).append(change)
             if by_rule:
                 by_rules[0 if is_asserted else 1].append(triple)

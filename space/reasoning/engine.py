@@ -82,6 +82,8 @@ class RuleEngine:
         self._agenda = Agenda(max_firings)
         self._log = ChangeLog(self.terms, self._store, self._asserted)
         self._firings: list[Firing] = []
+        # Decodes a Firing's triples when read; bound once, not per firing.
+        self._triple: Callable[[T], Triple] = self.terms.triple  # type: ignore[assignment]
         self._production = True
         self._loaded = False
         self._graph: Graph | None = None
@@ -213,18 +215,25 @@ class RuleEngine:
 
     def _assert(self, triples: Iterable[T], by: tuple[int, tuple[T, ...]] | None) -> None:
         """Assert triples and propagate through the monotonic rules."""
+        asserted, touch, journal, add = (
+            self._asserted,
+            self._log.touch,
+            self._log.journal,
+            self._store.add,
+        )
         queue = []
         for t in triples:
-            if t in self._asserted:
+            if t in asserted:
                 continue
-            self._log.touch(t)
-            self._asserted.add(t)
-            self._log.journal.append((True, t, by))
+            touch(t)
+            asserted.add(t)
+            journal.append((True, t, by))
             if by is not None:
                 self._asserted_by[t] = by
-            if self._store.add(t):
+            if add(t):
                 queue.append(t)
-        self._propagate(queue)
+        if queue:
+            self._propagate(queue)
 
     def _propagate(self, queue: list[T]) -> None:
         """Run the joins each new triple starts until nothing new is derived."""
@@ -262,17 +271,23 @@ class RuleEngine:
         With `notify` (remove, a caller's removal) the retraction may activate
         rules whose noValue now holds; without it (drop) it is silent.
         """
+        asserted, touch, journal, by = (
+            self._asserted,
+            self._log.touch,
+            self._log.journal,
+            self._asserted_by,
+        )
         doomed = []
         for t in triples:
-            if t not in self._asserted:
+            if t not in asserted:
                 continue
-            self._log.touch(t)
-            self._asserted.discard(t)
-            self._log.journal.append((False, t, self._asserted_by.pop(t, None)))
+            touch(t)
+            asserted.discard(t)
+            journal.append((False, t, by.pop(t, None)))
             doomed.append(t)
         if not doomed:
             return
-        gone = self._support.retract(doomed, self._store, self._asserted, self._log.touch)
+        gone = self._support.retract(doomed, self._store, asserted, touch)
         if not (notify and self._production):
             return
         out: list[Match] = []
@@ -285,20 +300,22 @@ class RuleEngine:
 
     def _run_agenda(self) -> None:
         """Fire activations one at a time while their match still holds."""
-        triples, ctx = self._store.triples, self._ctx
-        while self._agenda:
-            _, _, compiled, (premises, bindings) = self._agenda.pop()
+        triples, ctx, agenda, fire = self._store.triples, self._ctx, self._agenda, self._fire
+        while (activation := agenda.pop()) is not None:
+            _, _, compiled, (premises, bindings) = activation
             if not triples.issuperset(premises):
                 continue
-            if any(b.run(ctx, args(bindings)) is None for b, args in compiled.guards):
+            guards = compiled.guards
+            if guards and any(b.run(ctx, args(bindings)) is None for b, args in guards):
                 continue
-            self._agenda.count(compiled)
-            self._fire(compiled, premises, bindings)
+            agenda.count(compiled)
+            fire(compiled, premises, bindings)
 
     def _fire(self, compiled: CompiledRule, premises: tuple[T, ...], bindings: tuple) -> None:
         heads = compiled.heads(bindings)
-        dropped = [premises[i] for i in compiled.drops]
-        removed = [premises[i] for i in compiled.removes]
+        # Most production rules only drop: build no empty lists, no tuples twice.
+        dropped = tuple([premises[i] for i in compiled.drops]) if compiled.drops else ()
+        removed = tuple([premises[i] for i in compiled.removes]) if compiled.removes else ()
         for builtin, args in compiled.actions:
             builtin.act(self._ctx, args(bindings))
         if dropped:
@@ -307,9 +324,9 @@ class RuleEngine:
             self._unassert(removed, notify=True)
         self._assert(heads, (compiled.order, premises))
         functors = self.terms.functors
-        asserted = tuple(t for t in heads if t[2] not in functors)
-        retracted = (*dropped, *removed)
-        self._firings.append(Firing(compiled.label, premises, asserted, retracted, self._decode))
+        asserted = tuple(t for t in heads if t[2] not in functors) if functors else heads
+        retracted = dropped + removed if removed else dropped
+        self._firings.append(Firing(compiled.label, premises, asserted, retracted, self._triple))
 
     def _undo(self) -> None:
         """Reverse this update's assertions and retractions, with production rules off."""

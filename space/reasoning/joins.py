@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from rdflib.term import Node
 
 from space.reasoning.builtins import Context, Effect
+from space.reasoning.builtins.compare import Equal, NotEqual
 from space.reasoning.checks import located
 from space.reasoning.errors import RuleError
 from space.reasoning.rules import Call, Functor, Pattern, Rule, Term, Var, variables
@@ -67,6 +68,7 @@ class JoinCompiler:
             "E": _EMPTY,
             "CTX": ctx,
             "TERM": terms.term,
+            "KEYS": terms.keys,
             "FV": FunctorValue,
             "MKF": lambda name, args: terms.id(FunctorValue(name, args)),
         }
@@ -273,8 +275,6 @@ class _Body:
             self._call(call, index)
 
     def _call(self, call: Call, index: int) -> None:
-        name = f"B{self.compiler.count}_{index}"
-        self.compiler.namespace[name] = call.builtin.run
         args = []
         for arg in call.args:
             if isinstance(arg, Functor):
@@ -282,6 +282,15 @@ class _Body:
                     located(call.where, self.rule.name, "functors cannot be builtin arguments")
                 )
             args.append(self._expr(arg) or "None")
+        if type(call.builtin) in _INLINE:
+            # TermTable.same_value, inlined: the test most rules use, run on every join.
+            a, b = args
+            test = _INLINE[type(call.builtin)].format(a=a, b=b)
+            self.src.emit(f"if {test}:")
+            self.src.emit(f"    {self.src.skip()}")
+            return
+        name = f"B{self.compiler.count}_{index}"
+        self.compiler.namespace[name] = call.builtin.run
         result = self.src.temp()
         self.src.emit(f"{result} = {name}(CTX, ({''.join(a + ', ' for a in args)}))")
         self.src.emit(f"if {result} is None:")
@@ -295,6 +304,13 @@ class _Body:
                 local = self.src.temp()
                 self.src.emit(f"{local} = {result}[{i}]")
                 self.bound[arg] = local
+
+
+_INLINE = {
+    # builtin -> when a join must skip, given the ids of the two arguments
+    Equal: "{a} != {b} and KEYS[{a}] != KEYS[{b}]",
+    NotEqual: "{a} == {b} or KEYS[{a}] == KEYS[{b}]",
+}
 
 
 def _in_join(term: Term | None, pattern_vars: set[Var]) -> Term | None:

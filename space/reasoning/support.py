@@ -52,13 +52,14 @@ class Support:
     ) -> list[T]:
         """Delete triples no longer asserted, and what they alone supported.
 
-        `doomed` must already be out of `asserted`. `touch` is called before a
-        triple leaves the store. Returns the triples that are gone for good,
-        in the order they were reached.
+        `doomed` must already be out of `asserted`, and touched. `touch` is
+        called before any other triple leaves the store. Returns the triples
+        that are gone for good, in the order they were reached.
         """
-        stack = [t for t in doomed if t in store]
+        triples = store.triples
+        stack = [t for t in doomed if t in triples]
         if len(stack) == 1 and not self.dependents.get(stack[0]):
-            return self._retract_leaf(stack[0], store, touch)
+            return self._retract_leaf(stack[0], store)
         over: dict[T, None] = {}
         while stack:
             triple = stack.pop()
@@ -70,18 +71,29 @@ class Support:
             touch(triple)
             store.remove(triple)
         self._rederive(over, store)
-        gone = [t for t in over if t not in store]
+        gone = [t for t in over if t not in triples]
         self._forget(gone)
         return gone
 
-    def _retract_leaf(self, triple: T, store: TripleStore, touch: Callable[[T], None]) -> list[T]:
-        """Retract one triple that supports nothing: the common case, kept cheap."""
+    def _retract_leaf(self, triple: T, store: TripleStore) -> list[T]:
+        """Retract one triple that supports nothing: the common case, kept cheap.
+
+        What `_forget` does for it, inlined: it has no dependents to walk.
+        """
         found = self.derivations.get(triple)
-        if found and any(store.triples.issuperset(p) for _, p in found):
-            return []
-        touch(triple)
-        store.remove(triple)
-        self._forget([triple])
+        if found:
+            triples = store.triples
+            if any(triples.issuperset(p) for _, p in found):
+                return []
+            del self.derivations[triple]
+            dependents = self.dependents
+            for _, premises in found:
+                for premise in premises:
+                    users = dependents.get(premise)
+                    if users is not None:
+                        users.discard(triple)
+        self.dependents.pop(triple, None)  # an empty set, if any
+        store.remove(triple)  # no touch: the caller touched the doomed
         return [triple]
 
     def _rederive(self, over: dict[T, None], store: TripleStore) -> None:

@@ -25,11 +25,12 @@ class FunctorValue:
 
 
 Value = Node | FunctorValue
+_XSD_STRING = XSD.string  # looked up once: the namespace's attribute access is Python code
 
 
 def simple(term: Value) -> Value:
     """Return the simple literal for a literal typed xsd:string, else the term itself."""
-    if isinstance(term, Literal) and term.datatype == XSD.string:
+    if isinstance(term, Literal) and term.datatype == _XSD_STRING:
         return Literal(str(term))
     return term
 
