@@ -5,13 +5,8 @@ database, so changesets are applied in one order, acknowledged only once
 committed (and, with replicas, once every follower has them), and published
 after, as whole changesets and as per-triple keys.
 
-Several stores may hold the same spaces (see docs/deployment.md): the one
-alive the longest leads (sequences writes, answers reads); the others follow
-the leader's changes, and the follower with the smallest Zenoh id takes over
-when the leader's liveliness token goes away. A follower announces itself
-(`@stores/<zid>`: acknowledged as a replica, a candidate to take over) only
-once it has caught up with the leader; one that could not stays silent and
-retries.
+Several stores may hold the same spaces: `roles.py` decides which one leads
+(and serves them) and which follow; this module says what each role declares.
 """
 
 from __future__ import annotations
@@ -34,13 +29,13 @@ from space.store.acks import AckGate
 from space.store.db import Commit, StoreDB
 from space.store.queries import answer_key_get, answer_query
 from space.store.replica import Replica
+from space.store.roles import Roles
 from space.store.state import SpaceState
 
 log = logging.getLogger("tspace.store")
 
 _BATCH = 256
 HEARTBEAT = 0.5  # seconds between publications of each space's sequence number
-CATCH_UP_RETRY = 1.0  # seconds between a follower's attempts to catch up with the leader
 _SERVICES = ("write", "query", "log", "keys")
 
 
@@ -71,27 +66,25 @@ class StoreServer:
         look_for_leader: float = 0.0,
     ) -> None:
         self.session = session
-        self.look_for_leader = look_for_leader
         self.log_keep = log_keep
         self.data_dir = data_dir
         self.durable = durable
         self.root = root
-        self.zid = ""
-        self.role = ""
-        self.leader = ""
         self._queue: queue.SimpleQueue[_Request | None] = queue.SimpleQueue()
         self._spaces: dict[str, SpaceState] = {}
-        self._watchers: list = []
-        self._role_entities: list = []
-        self._token: zenoh.LivelinessToken | None = None
-        self._stores: set[str] = set()
-        self._behind_until: float | None = None  # a follower behind: when to try again
         self._acks = AckGate()
+        self._roles = Roles(
+            session,
+            root,
+            self._acks,
+            look_for_leader=look_for_leader,
+            leading=self._serve_leading,
+            following=self._serve_following,
+            seqs=self._seqs,
+        )
         self._graph_publishers: dict[tuple[str, str], zenoh.Publisher] = {}
         self._db: StoreDB | None = None
-        self._replica: Replica
         self._worker: threading.Thread | None = None
-        self._ready = threading.Event()
 
     def start(self, timeout: float = 10.0) -> None:
         """Load every space from the database, find the leader or lead, then serve.
@@ -100,37 +93,25 @@ class StoreServer:
         `timeout` seconds (a follower behind goes on trying in the background).
         """
         self._db = StoreDB(self.data_dir, durable=self.durable, log_keep=self.log_keep)
-        self._replica = Replica(self.session, self.root, self._db, self._space, self._forget)
+        replica = Replica(self.session, self.root, self._db, self._space, self._forget)
         for name in self._db.spaces():
             self._space(name)
-        self.zid = str(self.session.zid())
-        live = self.session.liveliness()
-        self._watchers = [
-            live.declare_subscriber(f"{self.root}/@stores/*", self._on_peer("store"), history=True),
-            live.declare_subscriber(
-                f"{self.root}/@leader/*", self._on_peer("leader"), history=True
-            ),
-        ]
+        self._roles.open(replica, self._on_peer)
         self._worker = threading.Thread(target=self._run, name="tspace-store", daemon=True)
         self._worker.start()
-        if not self._ready.wait(timeout):
+        if not self._roles.ready.wait(timeout):
             log.warning("store not ready after %g s (still catching up)", timeout)
         log.info(
             "store %s %s: %d space(s) from %s",
-            self.zid,
-            self.role,
+            self._roles.zid,
+            self._roles.role,
             len(self._spaces),
             self._db.path,
         )
 
     def close(self) -> None:
         """Stop serving, finish queued work and close the database (no-op if not started)."""
-        for entity in reversed([*self._watchers, *self._role_entities]):
-            entity.undeclare()
-        self._watchers, self._role_entities = [], []
-        if self._token is not None:
-            self._token.undeclare()
-            self._token = None
+        self._roles.close()
         if self._worker is not None:
             self._queue.put(None)
             self._worker.join()
@@ -171,11 +152,10 @@ class StoreServer:
     # The worker: the only thread that touches state and database.
 
     def _run(self) -> None:
-        self._decide_role()
+        self._roles.decide()
         next_beat = time.monotonic()
         while True:
-            if self._behind_until is not None and time.monotonic() >= self._behind_until:
-                self._catch_up()
+            self._roles.retry()
             if time.monotonic() >= next_beat:
                 self._heartbeat()
                 next_beat = time.monotonic() + HEARTBEAT
@@ -229,10 +209,8 @@ class StoreServer:
             if result is not None:
                 commits.append(result[1])
         self._flush(pending, commits)
-        # A follower behind ignores them: its next catch-up fetches them from the log.
-        if replicas and self.role == "following" and self._behind_until is None:
-            if not self._replica.follow([(r.space, r.payload or b"") for r in replicas]):
-                self._fall_behind()
+        if replicas:
+            self._roles.follow([(r.space, r.payload or b"") for r in replicas])
 
     def _flush(self, pending: list, commits: list[Commit]) -> None:
         if not pending:
@@ -287,7 +265,7 @@ class StoreServer:
 
     def _heartbeat(self) -> None:
         """Publish each space's sequence number, so subscribers learn of changes they missed."""
-        if self.role != "leading":
+        if self._roles.role != "leading":
             return
         for name, state in self._spaces.items():
             if state.seq:
@@ -295,11 +273,11 @@ class StoreServer:
 
     def _other(self, req: _Request) -> None:
         if req.kind == "peer":
-            self._peer(req.space, *unpack(req.payload or b""))  # type: ignore[misc]
+            self._roles.peer(req.space, *unpack(req.payload or b""))  # type: ignore[misc]
         elif req.kind == "ack":
             self._ack(req.payload or b"")
         elif req.kind == "spaces":
-            reply = pack({name: state.seq for name, state in self._spaces.items()})
+            reply = pack(self._seqs())
             self._answer(req, lambda: reply)
         elif req.kind == "state":
             self._answer(req, lambda: self._copy(unpack(req.payload or b"")))
@@ -381,120 +359,29 @@ class StoreServer:
             self._spaces[name] = state
         return state
 
-    # Roles: lead, or follow the leader's changes.
+    # What this store serves in each role (declared by `Roles`, on the worker).
 
-    def _decide_role(self) -> None:
-        """Follow a leading store if one answers within `look_for_leader` seconds, else lead."""
-        deadline = time.monotonic() + self.look_for_leader
-        while True:
-            replies = self.session.liveliness().get(f"{self.root}/@leader/*", timeout=0.5)
-            leaders = sorted(
-                zid
-                for r in replies
-                if r.ok is not None and (zid := str(r.ok.key_expr).rsplit("/", 1)[1]) != self.zid
-            )
-            if leaders:
-                self._follow(leaders[0])
-                return
-            if time.monotonic() >= deadline:
-                self._lead()
-                return
-            time.sleep(0.1)
-
-    def _declare_role(self, entities: list) -> None:
-        for entity in reversed(self._role_entities):
-            entity.undeclare()
-        self._role_entities = entities
-
-    def _lead(self) -> None:
+    def _serve_leading(self) -> list:
         root, s = self.root, self.session
         on_query = self._on_query
-        self._declare_role(
-            [
-                s.declare_queryable(f"{root}/*/@/write", on_query("write")),
-                s.declare_subscriber(f"{root}/*/@/write", self._on_sample("write")),
-                s.declare_queryable(f"{root}/*/@/query", on_query("query")),
-                s.declare_queryable(f"{root}/*/@/log", on_query("log")),
-                s.declare_queryable(f"{root}/*/{keys.ASSERTED}/**", on_query("keys")),
-                s.declare_queryable(f"{root}/*/{keys.INFERRED}/**", on_query("keys")),
-                s.declare_queryable(f"{root}/@repl/spaces", on_query("spaces")),
-                s.declare_queryable(f"{root}/@repl/state", on_query("state")),
-                s.declare_subscriber(f"{root}/@repl/ack", self._on_sample("ack")),
-                s.liveliness().declare_token(f"{root}/@leader/{self.zid}"),
-            ]
-        )
-        self.role, self.leader = "leading", self.zid
-        self._behind_until = None
-        self._acks.followers = self._stores - {self.zid}
-        self._announce()
-        self._ready.set()
-        log.info("store %s leads", self.zid)
+        return [
+            s.declare_queryable(f"{root}/*/@/write", on_query("write")),
+            s.declare_subscriber(f"{root}/*/@/write", self._on_sample("write")),
+            s.declare_queryable(f"{root}/*/@/query", on_query("query")),
+            s.declare_queryable(f"{root}/*/@/log", on_query("log")),
+            s.declare_queryable(f"{root}/*/{keys.ASSERTED}/**", on_query("keys")),
+            s.declare_queryable(f"{root}/*/{keys.INFERRED}/**", on_query("keys")),
+            s.declare_queryable(f"{root}/@repl/spaces", on_query("spaces")),
+            s.declare_queryable(f"{root}/@repl/state", on_query("state")),
+            s.declare_subscriber(f"{root}/@repl/ack", self._on_sample("ack")),
+        ]
 
-    def _follow(self, leader: str) -> None:
+    def _serve_following(self) -> list:
         changes = f"{self.root}/*/@/changes"
-        self._declare_role([self.session.declare_subscriber(changes, self._on_sample("replica"))])
-        self.role, self.leader = "following", leader
-        self._acks.followers = set()
-        self._silence()  # a leader stepping down is not a replica until it has caught up
-        self._catch_up()
+        return [self.session.declare_subscriber(changes, self._on_sample("replica"))]
 
-    def _catch_up(self) -> None:
-        """Fetch what this store missed from the leader; announce it then, or retry later."""
-        if not self._replica.catch_up():
-            self._fall_behind()
-            return
-        self._behind_until = None
-        self._announce()
-        self._ready.set()
-        log.info("store %s follows %s", self.zid, self.leader)
-
-    def _fall_behind(self) -> None:
-        """Stay silent (no replica, no candidate to lead) and try to catch up again soon."""
-        if self._behind_until is None:
-            log.warning(
-                "store %s could not catch up with the leader: silent, retrying every %g s",
-                self.zid,
-                CATCH_UP_RETRY,
-            )
-        self._silence()
-        self._behind_until = time.monotonic() + CATCH_UP_RETRY
-
-    def _silence(self) -> None:
-        if self._token is not None:
-            self._token.undeclare()
-            self._token = None
-
-    def _announce(self) -> None:
-        if self._token is None:
-            self._token = self.session.liveliness().declare_token(f"{self.root}/@stores/{self.zid}")
-        if self.role == "following":
-            self._replica.confirm({name: st.seq for name, st in self._spaces.items()})
-
-    def _peer(self, what: str, zid: str, alive: bool) -> None:
-        if what == "store":
-            if alive:
-                self._stores.add(zid)
-                if self.role == "leading" and zid != self.zid:
-                    self._acks.followers.add(zid)
-            else:
-                self._stores.discard(zid)
-                self._acks.forget(zid)
-            return
-        if alive and zid != self.zid:
-            if self.role == "leading" and zid < self.zid:
-                log.warning("store %s also leads; %s steps down", zid, self.zid)
-                self._follow(zid)
-            elif self.role == "following":
-                self.leader = zid
-        elif not alive and zid == self.leader and self.role == "following":
-            if self._behind_until is not None:
-                # Its copy may lack acknowledged changes: no answer beats a wrong one.
-                log.error("leader %s is gone before this store caught up: not taking over", zid)
-                return
-            candidates = sorted((self._stores - {zid}) | {self.zid})
-            if candidates[0] == self.zid:
-                log.warning("leader %s is gone; store %s takes over", zid, self.zid)
-                self._lead()
+    def _seqs(self) -> dict[str, int]:
+        return {name: state.seq for name, state in self._spaces.items()}
 
     def _ack(self, payload: bytes) -> None:
         message = unpack(payload)
