@@ -45,3 +45,8 @@ class InputError(SpaceError, ValueError):
 
 class UsageError(SpaceError):
     """A command line asks for something its options cannot mean (exit 2, as argparse's)."""
+
+
+def clause(reason: str) -> str:
+    """Return an OS or Zenoh reason to follow a colon: "Address in use" -> "address in use"."""
+    return reason[:1].lower() + reason[1:]

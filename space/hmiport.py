@@ -7,35 +7,23 @@ port (the default, which anything may hold).
 
 from __future__ import annotations
 
-import socket
 from collections.abc import Callable
 
 from space.errors import InputError
 from space.launch import AgentSpec
+from space.ports import any_free_port, probe
 
 DEFAULT_PORT = 8080
 DEFAULT_HOST = "127.0.0.1"
 
 
 def port_free(host: str, port: int) -> bool:
-    """Return True if a server could listen on `host:port` now.
-
-    Binds as `http.server` does (SO_REUSEADDR), so a port in TIME_WAIT counts as free.
-    """
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        try:
-            s.bind((host, port))
-        except OSError:
-            return False
+    """Return True if a server could listen on `host:port` now (see `ports.probe`)."""
+    try:
+        probe(host, port)
+    except OSError:
+        return False
     return True
-
-
-def any_free_port(host: str) -> int:
-    """Return a port free on `host` now, chosen by the kernel."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind((host, 0))
-        return int(s.getsockname()[1])
 
 
 def choose_port(agent: AgentSpec, named: int | None, report: Callable[[str], None]) -> int:

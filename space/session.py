@@ -7,7 +7,8 @@ import socket
 
 import zenoh
 
-from space.errors import ListenFailed, SpaceUnavailable
+from space.errors import ListenFailed, SpaceUnavailable, clause
+from space.ports import probe
 from space.zconfig import make_config, zenoh_reason
 
 # "Can not create a new TCP listener bound to tcp/127.0.0.1:7447: [127.0.0.1:7447:
@@ -58,10 +59,7 @@ def listen_failed(exc: zenoh.ZError, listen: list[str] | None) -> ListenFailed:
     reason = zenoh_reason(exc)
     found = _LISTENER_RE.search(reason)
     if found is not None:
-        why = found.group("why")
-        return ListenFailed(
-            f"cannot listen on {found.group('endpoint')}: {why[:1].lower()}{why[1:]}"
-        )
+        return ListenFailed(f"cannot listen on {found.group('endpoint')}: {clause(found['why'])}")
     where = ", ".join(listen) if listen else "the configured endpoints"
     return ListenFailed(f"cannot listen on {where}: {reason}")
 
@@ -84,11 +82,7 @@ def check_can_listen(listen: list[str]) -> None:
         if kind is None or not port.isdigit():
             continue
         try:
-            family, _, _, _, where = socket.getaddrinfo(host.strip("[]"), int(port), type=kind)[0]
-            with socket.socket(family, kind) as probe:
-                # As the router's own listener: a port in TIME_WAIT is free, a listening one is not.
-                probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-                probe.bind(where)
+            probe(host, int(port), kind)
         except OSError as exc:
-            why = exc.strerror or str(exc)
-            raise ListenFailed(f"cannot listen on {endpoint}: {why[:1].lower()}{why[1:]}") from exc
+            why = clause(exc.strerror or str(exc))
+            raise ListenFailed(f"cannot listen on {endpoint}: {why}") from exc

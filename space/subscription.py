@@ -88,7 +88,7 @@ class Subscription:
             return seq, None
         if self.skip_subjects is not None:
             wire = _without_subjects(wire, f"<{self.skip_subjects}")
-        return seq, Changeset.from_wire(wire, published=True)
+        return seq, Changeset.from_wire(wire)  # its seq, checked above, is read as it is
 
     def skips(self, triple: tuple[Node, Node, Node]) -> bool:
         """Return True for a triple this subscription leaves out (its subject has the prefix)."""

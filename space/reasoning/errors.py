@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from space.errors import SpaceError
+from space.errors import SpaceError, clause
 
 
 class RuleError(SpaceError):
@@ -33,4 +33,4 @@ def unreadable(path: object, exc: OSError) -> str:
     if isinstance(exc, FileNotFoundError):
         return f"{path}: no such file"
     reason = exc.strerror or type(exc).__name__
-    return f"{path}: {reason[:1].lower()}{reason[1:]}"
+    return f"{path}: {clause(reason)}"
