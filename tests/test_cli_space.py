@@ -136,28 +136,17 @@ def test_bad_sparql_is_one_line_with_position(run_tspace):
     assert "col:8" in out.stderr
 
 
-def test_serve_on_a_taken_port_is_one_line_and_exit_1(server, tmp_path):
+@pytest.mark.parametrize("command", ["serve", "up"])
+def test_a_taken_port_is_one_line_and_exit_1_before_starting_anything(server, tmp_path, command):
     out = subprocess.run(
-        tspace_cmd("serve", "--listen", server.endpoint, "--data", str(tmp_path / "data")),
+        tspace_cmd(command, "--listen", server.endpoint, "--data", str(tmp_path / "data")),
         capture_output=True,
         text=True,
         timeout=30,
     )
     assert out.returncode == 1
-    assert (
-        out.stderr == f"tspace serve: cannot listen on {server.endpoint}: address already in use\n"
-    )
-
-
-def test_up_on_a_taken_port_is_one_line_and_exit_1_before_starting_anything(server, tmp_path):
-    out = subprocess.run(
-        tspace_cmd("up", "--listen", server.endpoint, "--data", str(tmp_path / "data")),
-        capture_output=True,
-        text=True,
-        timeout=30,
-    )
-    assert out.returncode == 1
-    assert out.stderr == f"tspace up: cannot listen on {server.endpoint}: address already in use\n"
+    expected = f"tspace {command}: cannot listen on {server.endpoint}: address already in use\n"
+    assert out.stderr == expected
     assert not (tmp_path / "data").exists()  # no store, no agent was started
 
 
