@@ -7,7 +7,8 @@ cause: what production rules changed (asserted) and what is entailed
 own changesets are ignored. A changed rules file is reloaded without a
 restart; a broken one is logged with its line and column and the rules in
 force stay. On start it writes the ontology (and `--robot-file`) into the
-space when the space does not have them yet.
+space when the space does not have them yet. It answers `why` on the space's
+`@/why` queryable (`agents.explainer`, docs/wire-format.md).
 
 One reasoner serves a whole fleet. With `--per-robot`, one per robot instead
 (a robot's reasoner can run on the robot): each applies every change, and
@@ -29,19 +30,24 @@ from rdflib import OWL, RDF, URIRef
 from rdflib.term import Node
 
 from agents.base import Agent, local_name, run_agent
+from agents.explainer import WhyQueries, Writers
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
 from agents.ownership import PREFIX, Roster, concerned_robot
 from agents.view import AC
-from space import Change, SpaceError, Subscription
+from space import Change, Changeset, SpaceError, Subscription
+from space.errors import MalformedPayload
 from space.heap import refreeze
 from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
+from space.reasoning.explain import Explainer
 from space.request import Pending
-from space.terms import Triple, triple_to_nt
+from space.template import Template
+from space.terms import Triple, from_nt, triple_to_nt
 
 REPO = Path(__file__).resolve().parents[1]
 ONTOLOGY_IRI = URIRef("https://w3id.org/tspace/selfconfig")
 RELOAD_PERIOD = 1.0
 IN_FLIGHT = 64  # answers sent, not yet acknowledged, at most
+WHY_LIMIT = 100  # triples explained per why request, at most
 
 
 class Reasoner(Agent):
@@ -68,6 +74,9 @@ class Reasoner(Agent):
         self._unacked: deque[tuple[str | None, Pending]] = deque()
         self._checked = 0.0
         self._loaded_seq = 0
+        self.writers = Writers(self._history)
+        self.why_queries = WhyQueries()
+        self._explainer: Explainer | None = None
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -150,6 +159,9 @@ class Reasoner(Agent):
         state = sorted((t for t in asserted if not is_record(t)), key=triple_to_nt)
         delta = engine.load(state)
         self.engine, self._loaded_seq = engine, seq
+        self._explainer = None
+        self.writers.loaded(seq)
+        self.why_queries.open(self.ts.session, self.ts.space)
         self.started = True
         self.log.info("loaded %d rules over %d asserted triples", len(engine.rules), len(asserted))
         if self.roster is None or self.roster.answers(None):
@@ -161,6 +173,7 @@ class Reasoner(Agent):
     def shutdown(self) -> None:
         """Withdraw from the per-robot reasoners, then leave the space."""
         try:
+            self.why_queries.close()
             self._settle()
             if self._joined is not None:
                 self._joined.undeclare()
@@ -196,6 +209,7 @@ class Reasoner(Agent):
         """Apply another agent's changeset (firing records left out) and answer it."""
         if self.engine is None or change.seq <= self._loaded_seq:
             return  # in the state loaded
+        self.writers.note(change)
         added, removed = list(change.added), list(change.removed)
         removed += self._replaced(added, removed)
         if not added and not removed:
@@ -264,6 +278,7 @@ class Reasoner(Agent):
             inferred_removed=inferred_removed,
             cause=cause,
         )
+        self.writers.note(cs)
         if wait:
             self.ts.send(cs, timeout=self.args.timeout)
             return
@@ -308,6 +323,7 @@ class Reasoner(Agent):
         The rules files are checked every second.
         """
         self._settle()
+        self.why_queries.answer_pending(self._why)
         if time.monotonic() - self._checked < RELOAD_PERIOD:
             return
         self._checked = time.monotonic()
@@ -332,11 +348,40 @@ class Reasoner(Agent):
         except RuleError as exc:
             self.log.error("rules not reloaded, the previous rules stay in force: %s", exc)
             return
-        self.engine = engine
+        self.engine, self._explainer = engine, None
         refreeze()  # the old engine is garbage now, out of the frozen generation
         self.log.info("rules reloaded: %d rules", len(engine.rules))
         if self.roster is None or self.roster.answers(None):
             self._write(delta, None, inferred_before=inferred_before)
+
+    # Why
+
+    def _why(self, request: object) -> dict:
+        """Answer a why request: the explanation of each matching triple (see docs/wire-format.md).
+
+        Raises:
+            MalformedPayload: the request is not `{template, limit}`.
+        """
+        assert self.engine is not None
+        if not isinstance(request, dict):
+            raise MalformedPayload("a why request is a map {template, limit}")
+        wire = request.get("template")
+        if wire is not None and (not isinstance(wire, list | tuple) or len(wire) != 3):
+            raise MalformedPayload(f"a template is three terms or nulls, got {wire!r}")
+        template = Template(*(None if t is None else from_nt(t) for t in (wire or (None,) * 3)))
+        limit = min(int(request.get("limit") or 20), WHY_LIMIT)
+        matches = sorted(
+            (t for t in self.engine.match(*template.pattern()) if not is_record(t)),
+            key=triple_to_nt,
+        )
+        if self._explainer is None:
+            self._explainer = Explainer(self.engine.why, self.engine.rules, self.writers.lookup)
+        trees = self._explainer.explain(matches[:limit])
+        return {"explanations": [tree.to_wire() for tree in trees], "more": len(matches) > limit}
+
+    def _history(self, first: int, last: int) -> list[Changeset]:
+        assert self.ts is not None
+        return self.ts.history(first, last, timeout=self.args.timeout)[0]
 
 
 def _mtime(path: Path) -> float:

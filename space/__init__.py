@@ -6,12 +6,14 @@ from space.errors import (
     ChangesetRejected,
     InputError,
     MalformedPayload,
+    NoReasoner,
     QueryError,
     SpaceError,
     SpaceTimeout,
     SpaceUnavailable,
     TemplateError,
 )
+from space.explanation import Explanation, Written
 from space.subscription import Change, Subscription
 from space.template import Template
 
@@ -19,8 +21,10 @@ __all__ = [
     "Change",
     "Changeset",
     "ChangesetRejected",
+    "Explanation",
     "InputError",
     "MalformedPayload",
+    "NoReasoner",
     "QueryError",
     "SpaceError",
     "SpaceTimeout",
@@ -30,4 +34,5 @@ __all__ = [
     "TemplateError",
     "Transaction",
     "TripleSpace",
+    "Written",
 ]
