@@ -26,8 +26,9 @@ TASKS = {
     "AttendingPatient": "attends",
     "Guiding": "guides",
 }
-# Properties that say something about a robot (the rest about a device or a place).
+# Bookkeeping a sentence leaves out: what follows from it is what a reader wants.
 QUIET = {AC.charge_percent, AC.actual_mode, AC.task_elapsed, AC.task_started}
+QUIET_CAUSES = {AC.task_elapsed, AC.task_started, AC.resume_task}
 
 
 def _name(term: Node, robot: str | None = None) -> str:
@@ -80,7 +81,7 @@ def what_changed(triples: Iterable[Triple], graph: Graph) -> str:
     levels = {s for s, p, _o in kept if p == AC.battery_level}
     for s, p, o in kept:
         robot = _robot_of(graph, s)
-        if p == AC.charge_percent and s in levels:
+        if (p == AC.charge_percent and s in levels) or p in QUIET_CAUSES:
             continue
         subject = _name(s, robot)
         if p == AC.battery_level:
@@ -89,6 +90,8 @@ def what_changed(triples: Iterable[Triple], graph: Graph) -> str:
             said.append(f"{subject} {_name(o)}%")
         elif p == AC.location:
             said.append(f"{subject} at {_name(o)}")
+        elif p == AC.target_place:
+            said.append(f"{subject} heading to {_name(o)}")
         elif p in (AC.current_task, AC.requested_task):
             verb = "asked to" if p == AC.requested_task else "now"
             said.append(f"{subject} {verb} {_task(graph, o, None)}")

@@ -317,6 +317,14 @@ class TripleSpace:
         except ValueError as exc:
             raise QueryError(f"unreadable SPARQL result: {exc}") from exc
 
+    def seq(self, *, timeout: float = 5.0) -> int:
+        """Return the space's sequence number now (how many changesets it has applied).
+
+        Raises:
+            SpaceUnavailable, SpaceTimeout: as `query`.
+        """
+        return self._seq(timeout)
+
     def history(
         self, first: int = 1, last: int = 0, *, timeout: float = 5.0
     ) -> tuple[list[Changeset], int]:

@@ -7,7 +7,7 @@ back. The msgpack shape is in docs/wire-format.md.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from datetime import datetime
 
@@ -68,6 +68,25 @@ class Explanation:
         yield depth, self
         for premise in self.premises:
             yield from premise.walk(depth + 1)
+
+    def to_json(self, text: Callable[[Triple], str]) -> dict:
+        """Return JSON-ready data: the triple as N-Triples and as `text` says it."""
+        out: dict = {"triple": triple_to_nt(self.triple), "text": text(self.triple)}
+        out["holds"] = self.holds
+        if self.rule is not None:
+            out.update(rule=self.rule, comment=self.comment, where=self.where)
+        if self.written is not None:
+            when = self.written.time
+            out["written"] = {
+                "agent": self.written.agent,
+                "time": when.isoformat() if when else None,
+                "changeset": self.written.changeset,
+                "seq": self.written.seq or None,
+            }
+        if self.repeated:
+            out["repeated"] = True
+        out["premises"] = [p.to_json(text) for p in self.premises]
+        return out
 
     def to_wire(self) -> dict:
         """Return the msgpack-ready map of docs/wire-format.md."""

@@ -11,6 +11,7 @@ from typing import TextIO
 from space.cli.options import add_connect, open_space
 from space.explanation import Explanation
 from space.prefixes import PrefixMap
+from space.terms import Triple
 
 ORDER = 45
 FORMATS = ("text", "json")
@@ -48,7 +49,12 @@ def run(args: argparse.Namespace) -> int:
         template = Template.parse(args.triple, prefixes)
         trees = ts.why(template, limit=args.limit, timeout=args.timeout)
     if args.format == "json":
-        json.dump([tree_json(t, prefixes) for t in trees], sys.stdout, indent=2)
+        from space.display import triple_text
+
+        def text(triple: Triple) -> str:
+            return triple_text(triple, prefixes)
+
+        json.dump([t.to_json(text) for t in trees], sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
         for i, tree in enumerate(trees):
@@ -115,29 +121,3 @@ def _short(where: str) -> str:
     path, _, line = where.rpartition(":")
     relative = os.path.relpath(path) if os.path.isabs(path) else path
     return f"{path if relative.startswith('..') else relative}:{line}"
-
-
-def tree_json(node: Explanation, prefixes: PrefixMap) -> dict:
-    """Return an explanation as JSON: terms in N-Triples and as prefixed text."""
-    from space.display import triple_text
-    from space.terms import triple_to_nt
-
-    out: dict = {
-        "triple": triple_to_nt(node.triple),
-        "text": triple_text(node.triple, prefixes),
-        "holds": node.holds,
-    }
-    if node.rule is not None:
-        out.update(rule=node.rule, comment=node.comment, where=node.where)
-    if node.written is not None:
-        when = node.written.time
-        out["written"] = {
-            "agent": node.written.agent,
-            "time": when.isoformat() if when else None,
-            "changeset": node.written.changeset,
-            "seq": node.written.seq or None,
-        }
-    if node.repeated:
-        out["repeated"] = True
-    out["premises"] = [tree_json(p, prefixes) for p in node.premises]
-    return out
