@@ -30,16 +30,19 @@ from agents.base import Agent, local_name, run_agent
 from agents.hmi_history import LOOKBACK, History
 from agents.hmi_web.guard import Guard
 from agents.hmi_web.server import CommandError, Commands, HmiServer, StateBoard
+from agents.runtime.robotview import BadValues, read_firings, read_robots
 from agents.sim.battery import middle_of
 from agents.view import AC
-from space import Change
-from space.display import triple_text
-from space.errors import MalformedPayload
-from space.mirror import ChangeRecord
-from space.prefixes import PrefixMap
-from space.robotview import BadValues, read_firings, read_robots
-from space.template import Template
-from space.terms import Triple, from_nt
+from space import (
+    Change,
+    ChangeRecord,
+    MalformedPayload,
+    PrefixMap,
+    Template,
+    Triple,
+    from_nt,
+    triple_text,
+)
 
 TASK_TYPES = ("AttendingPatient", "Guiding", "GoingToDock", "Idle")
 PREFIXES = PrefixMap({"ac": str(AC), "rdf": str(RDF), "rdfs": str(RDFS), "owl": str(OWL)})

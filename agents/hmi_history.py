@@ -20,8 +20,7 @@ from rdflib.term import Node
 
 from agents.sentences import firing_sentence
 from agents.view import AC
-from space import Changeset
-from space.terms import Triple, triple_to_nt
+from space import Changeset, Triple, triple_to_nt
 
 LOOKBACK = 3000  # changesets read from the store's log at start
 CAUSES_KEPT = 500  # recent changesets remembered to say what caused a firing

@@ -30,24 +30,29 @@ from rdflib import OWL, RDF, URIRef
 from rdflib.term import Node
 
 from agents.base import Agent, local_name, run_agent
-from agents.explainer import WhyQueries, Writers
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
 from agents.ownership import PREFIX, Roster, concerned_robot
 from agents.view import AC
-from space import Change, Changeset, SpaceError, Subscription
-from space.errors import MalformedPayload
-from space.heap import refreeze
-from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
-from space.reasoning.explain import Explainer
-from space.request import Pending
-from space.template import Template
-from space.terms import Triple, from_nt, triple_to_nt
+from agents.writers import Writers
+from space import (
+    Change,
+    Changeset,
+    Explanation,
+    Pending,
+    SpaceError,
+    Subscription,
+    Template,
+    Triple,
+    WhyService,
+    refreeze,
+    triple_to_nt,
+)
+from space.reasoning import Delta, Explainer, Firing, Origin, RuleEngine, RuleError, read_graph
 
 REPO = Path(__file__).resolve().parents[1]
 ONTOLOGY_IRI = URIRef("https://w3id.org/tspace/selfconfig")
 RELOAD_PERIOD = 1.0
 IN_FLIGHT = 64  # answers sent, not yet acknowledged, at most
-WHY_LIMIT = 100  # triples explained per why request, at most
 
 
 class Reasoner(Agent):
@@ -75,7 +80,7 @@ class Reasoner(Agent):
         self._checked = 0.0
         self._loaded_seq = 0
         self.writers = Writers(self._history)
-        self.why_queries = WhyQueries()
+        self.why = WhyService()
         self._explainer: Explainer | None = None
 
     @classmethod
@@ -161,7 +166,7 @@ class Reasoner(Agent):
         self.engine, self._loaded_seq = engine, seq
         self._explainer = None
         self.writers.loaded(seq)
-        self.why_queries.open(self.ts.session, self.ts.space)
+        self.why.open(self.ts.session, self.ts.space)
         self.started = True
         self.log.info("loaded %d rules over %d asserted triples", len(engine.rules), len(asserted))
         if self.roster is None or self.roster.answers(None):
@@ -173,7 +178,7 @@ class Reasoner(Agent):
     def shutdown(self) -> None:
         """Withdraw from the per-robot reasoners, then leave the space."""
         try:
-            self.why_queries.close()
+            self.why.close()
             self._settle()
             if self._joined is not None:
                 self._joined.undeclare()
@@ -323,7 +328,7 @@ class Reasoner(Agent):
         The rules files are checked every second.
         """
         self._settle()
-        self.why_queries.answer_pending(self._why)
+        self.why.answer_pending(self._explain)
         if time.monotonic() - self._checked < RELOAD_PERIOD:
             return
         self._checked = time.monotonic()
@@ -356,28 +361,16 @@ class Reasoner(Agent):
 
     # Why
 
-    def _why(self, request: object) -> dict:
-        """Answer a why request: the explanation of each matching triple (see docs/wire-format.md).
-
-        Raises:
-            MalformedPayload: the request is not `{template, limit}`.
-        """
+    def _explain(self, template: Template, limit: int) -> tuple[list[Explanation], bool]:
+        """Explain at most `limit` matching triples the engine holds, in N-Triples order."""
         assert self.engine is not None
-        if not isinstance(request, dict):
-            raise MalformedPayload("a why request is a map {template, limit}")
-        wire = request.get("template")
-        if wire is not None and (not isinstance(wire, list | tuple) or len(wire) != 3):
-            raise MalformedPayload(f"a template is three terms or nulls, got {wire!r}")
-        template = Template(*(None if t is None else from_nt(t) for t in (wire or (None,) * 3)))
-        limit = min(int(request.get("limit") or 20), WHY_LIMIT)
         matches = sorted(
             (t for t in self.engine.match(*template.pattern()) if not is_record(t)),
             key=triple_to_nt,
         )
         if self._explainer is None:
             self._explainer = Explainer(self.engine.why, self.engine.rules, self.writers.lookup)
-        trees = self._explainer.explain(matches[:limit])
-        return {"explanations": [tree.to_wire() for tree in trees], "more": len(matches) > limit}
+        return self._explainer.explain(matches[:limit]), len(matches) > limit
 
     def _history(self, first: int, last: int) -> list[Changeset]:
         assert self.ts is not None

@@ -16,7 +16,7 @@ from rdflib import RDF, BNode, Graph, Literal, URIRef
 from rdflib.term import Node
 
 from agents.view import AC, RECORD_PREFIX
-from space.terms import Triple
+from space import Triple
 
 TASKS = {
     "GoingToDock": "goes to the dock",

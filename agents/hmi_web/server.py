@@ -32,7 +32,7 @@ from importlib import resources
 from urllib.parse import parse_qs, urlsplit
 
 from agents.hmi_web.guard import Guard, Refused
-from space.errors import SpaceError
+from space import SpaceError
 
 KEEPALIVE = 15.0
 COMMAND_TIMEOUT = 10.0

@@ -4,6 +4,7 @@ from space.reasoning.builtins import Builtin, Registry, default_registry
 from space.reasoning.delta import Change, Delta, Firing, Origin, Why
 from space.reasoning.engine import RuleEngine, read_graph
 from space.reasoning.errors import RuleError, RuleLoopError, RuleSyntaxError
+from space.reasoning.explain import Explainer
 from space.reasoning.parser import load_rules, parse_rules
 from space.reasoning.rules import Rule
 
@@ -11,6 +12,7 @@ __all__ = [
     "Builtin",
     "Change",
     "Delta",
+    "Explainer",
     "Firing",
     "Origin",
     "Registry",

@@ -1,26 +1,16 @@
-"""The reasoner's answers to `why`: who wrote each fact, and the `@/why` queryable.
+"""Who wrote each fact the reasoner holds, for its answers to `why`.
 
 `Writers` remembers, for each asserted triple, the changeset that last added
 it: from the changes the reasoner applies, and for what it loaded at start
-from the store's log, read backwards on demand. `WhyQueries` holds the
-queryable: its callback only queues the query; the reasoner's own thread
-answers it (the engine is not thread-safe, and nothing blocks in Zenoh).
+from the store's log, read backwards on demand.
 """
 
 from __future__ import annotations
 
 import logging
-import queue
 from collections.abc import Callable, Iterable
 
-import zenoh
-
-from space import Changeset, SpaceError
-from space.changeset import pack, unpack
-from space.errors import MalformedPayload
-from space.explanation import Written
-from space.keys import service_key
-from space.terms import Triple
+from space import Changeset, SpaceError, Triple, Written
 
 log = logging.getLogger("tspace.why")
 
@@ -78,42 +68,3 @@ class Writers:
             self._unread = first - 1
             missing = {t for t in missing if t not in self._by}
         return {t: self._by[t] for t in wanted if t in self._by}
-
-
-class WhyQueries:
-    """The `<root>/<space>/@/why` queryable; its queries wait for `answer_pending`."""
-
-    def __init__(self) -> None:
-        self._queue: queue.SimpleQueue[zenoh.Query] = queue.SimpleQueue()
-        self._queryable: zenoh.Queryable | None = None
-
-    def open(self, session: zenoh.Session, space: str) -> None:
-        """Declare the queryable (once)."""
-        if self._queryable is None:
-            self._queryable = session.declare_queryable(service_key(space, "why"), self._queue.put)
-
-    def close(self) -> None:
-        """Undeclare the queryable; queued queries are dropped unanswered."""
-        if self._queryable is not None:
-            self._queryable.undeclare()
-            self._queryable = None
-
-    def answer_pending(self, answer: Callable[[object], dict]) -> None:
-        """Answer every queued query with `answer(request)` (on the caller's thread).
-
-        A malformed request gets an error reply naming what is wrong; the process goes on.
-        """
-        while True:
-            try:
-                query = self._queue.get_nowait()
-            except queue.Empty:
-                return
-            key = str(query.key_expr)
-            try:
-                payload = query.payload.to_bytes() if query.payload is not None else b""
-                query.reply(key, pack(answer(unpack(payload))))
-            except (MalformedPayload, SpaceError, ValueError) as exc:
-                log.warning("why request refused: %s", exc)
-                query.reply_err(f"why: {exc}".encode())
-            finally:
-                query.drop()
