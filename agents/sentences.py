@@ -129,7 +129,7 @@ def what_follows(added: Sequence[Triple], removed: Sequence[Triple], graph: Grap
         if said and said[0].startswith("at "):
             said.insert(0, "moves")
         parts.append(" ".join([robot, *said]))
-    parts += [f"{', '.join(devices)} {mode}" for (_r, mode), devices in modes.items()]
+    parts += [f"{', '.join(sorted(devices))} {mode}" for (_r, mode), devices in modes.items()]
     parts += others
     changed = {(s, p) for s, p, _o in kept}
     parts += [

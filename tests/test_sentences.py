@@ -24,7 +24,7 @@ def test_the_papers_firing_reads_as_one_sentence():
     cause = [(AC.robot1_battery, AC.battery_level, Literal("very low"))]
     assert firing_sentence(cause, added, removed, graph) == (
         "battery very low → robot1 goes to the dock at low speed; "
-        "screen, speakers, microphone stand-by"
+        "microphone, screen, speakers stand-by"
     )
 
 

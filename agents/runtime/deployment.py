@@ -39,6 +39,7 @@ class Options:
     scenario: Scenario | None = None
     once: bool = False
     step_timeout: float = 90.0
+    fresh: bool = False
 
 
 def client_endpoint(listen: str) -> str:
@@ -123,8 +124,9 @@ class Deployment:
             ts = self._wait_for_store()
             if ts is None:
                 return 1
-            self._load(ts)
             scenario = self.options.scenario
+            # A scenario is a story from its own start: never from where a last run stopped.
+            self._load(ts, fresh=self.options.fresh or scenario is not None)
             if scenario is not None and scenario.prepare is not None:
                 scenario.prepare(ts, self.robot)
             for agent in self.launch.agents:
@@ -171,13 +173,22 @@ class Deployment:
             ts.close()
         return None
 
-    def _load(self, ts: TripleSpace) -> None:
-        """Write the launch file's Turtle files into a space that is still empty."""
-        if not self.launch.load:
+    def _load(self, ts: TripleSpace, *, fresh: bool) -> None:
+        """Write the launch file's Turtle files into a space that is empty, or emptied if `fresh`.
+
+        Without `fresh` a space that holds anything is left as it is: the robots
+        resume where they were.
+        """
+        asserted, inferred, _ = ts.graphs((None, None, None), timeout=10.0)
+        held = len(asserted) + len(inferred)
+        if held and fresh:
+            # One changeset: a subscriber sees the old state go at once, never half of it.
+            ts.apply(removed=asserted, inferred_removed=inferred, timeout=60.0)
+            self.view.event(f"space {self.launch.space}: started afresh ({held} triples removed)")
+        elif held:
+            self.view.event(f"space {self.launch.space} holds {held} triples; resuming from them")
             return
-        held, _ = ts.snapshot((None, None, None), timeout=10.0)
-        if len(held):
-            self.view.event(f"space {self.launch.space} holds {len(held)} triples; not reloading")
+        if not self.launch.load:
             return
         for path in self.launch.load:
             graph = read_turtle(str(path))
@@ -221,6 +232,10 @@ class Deployment:
         if not self.options.once:
             return None
         if run.finished:
+            try:
+                run.tick(ts, self.mirror)  # its finishing action, if not run yet
+            except SpaceError as exc:
+                self.view.event(f"scenario: could not finish ({exc})")
             print(f"scenario {run.scenario.name}: completed", flush=True)
             return 0
         if run.failure is not None:
@@ -248,10 +263,11 @@ class Deployment:
         url = self.hmi_url()
         if url:
             header += f", HMI {url}"
+        graph = self.mirror.graph()
         return Frame(
             header=header,
-            robots=read_robots(self.mirror.graph(), self.bad_values),
-            firings=read_firings(self.mirror.recent()),
+            robots=read_robots(graph, self.bad_values),
+            firings=read_firings(self.mirror.recent(), graph=graph),
             processes=self.supervisor.status(),
             footer=self.scenario.progress if self.scenario else "Ctrl-C stops everything.",
         )

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from rdflib import RDF, BNode, Graph, Literal, Namespace, URIRef
 from rdflib.term import Node
 
+from agents.sentences import firing_sentence
 from space import ChangeRecord, PrefixMap, Triple
 
 AC = Namespace("https://w3id.org/tspace/selfconfig#")
@@ -79,6 +80,7 @@ class Firing:
         removed: what it retracted, compacted.
         cause_agent: who wrote the cause, if the cause is still remembered.
         cause: the cause's triples, compacted (empty if forgotten).
+        sentence: the firing said as a sentence (`agents.sentences`), "" if not asked for.
     """
 
     seq: int
@@ -89,6 +91,7 @@ class Firing:
     removed: tuple[str, ...]
     cause_agent: str | None
     cause: tuple[str, ...]
+    sentence: str = ""
 
 
 class BadValues:
@@ -213,8 +216,13 @@ def _noise(triple: Triple) -> bool:
     return any(isinstance(t, BNode) for t in triple)
 
 
-def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firing]:
-    """Return the last `limit` changesets that name a cause, newest first."""
+def read_firings(
+    records: Iterable[ChangeRecord], limit: int = 20, graph: Graph | None = None
+) -> list[Firing]:
+    """Return the last `limit` changesets that name a cause, newest first.
+
+    With `graph` (the space now), each is also said as a sentence.
+    """
     records = list(records)
     by_id = {r.id: r for r in records}
     firings = []
@@ -234,6 +242,11 @@ def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firin
                 removed=tuple(describe(t) for t in record.removed if not _noise(t)),
                 cause_agent=cause.agent if cause else None,
                 cause=tuple(describe(t) for t in cause.added if not _noise(t)) if cause else (),
+                sentence=""
+                if graph is None
+                else firing_sentence(
+                    cause.added if cause else (), record.added, record.removed, graph, names
+                ),
             )
         )
         if len(firings) == limit:
