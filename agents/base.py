@@ -263,10 +263,13 @@ class Agent:
         """Advance simulations and controllers; called every `--tick` seconds. Never blocks long."""
 
 
-def build_parser(cls: type[Agent]) -> argparse.ArgumentParser:
-    """Return the command-line parser of an agent class: common options, then its own."""
+def build_parser(cls: type[Agent], prog: str | None = None) -> argparse.ArgumentParser:
+    """Return the command-line parser of an agent class: common options, then its own.
+
+    `prog` is how the agent was run, for its usage line (`python -m agents.KIND` by default).
+    """
     parser = argparse.ArgumentParser(
-        prog=f"python -m agents.{cls.kind}", description=(cls.__doc__ or "").split("\n")[0]
+        prog=prog or f"python -m agents.{cls.kind}", description=(cls.__doc__ or "").split("\n")[0]
     )
     add_connect(parser)
     parser.add_argument(
@@ -295,9 +298,9 @@ def build_parser(cls: type[Agent]) -> argparse.ArgumentParser:
     return parser
 
 
-def run_agent(cls: type[Agent], argv: Sequence[str] | None = None) -> int:
-    """Run an agent until SIGINT or SIGTERM; return the process exit code."""
-    args = build_parser(cls).parse_args(argv)
+def run_agent(cls: type[Agent], argv: Sequence[str] | None = None, prog: str | None = None) -> int:
+    """Run an agent until SIGINT or SIGTERM; return the exit code (`prog`: see `build_parser`)."""
+    args = build_parser(cls, prog).parse_args(argv)
     logging.basicConfig(
         stream=sys.stderr,
         level=[logging.INFO, logging.DEBUG][min(args.verbose, 1)],

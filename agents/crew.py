@@ -161,9 +161,9 @@ class Crew(Agent):
         self._touched.clear()
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run a crew (see `--help`)."""
-    return run_agent(Crew, argv)
+    return run_agent(Crew, argv, prog)
 
 
 if __name__ == "__main__":

@@ -247,9 +247,9 @@ class Hmi(Agent):
         return out
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run the HMI agent (see `--help`)."""
-    return run_agent(Hmi, argv)
+    return run_agent(Hmi, argv, prog)
 
 
 if __name__ == "__main__":

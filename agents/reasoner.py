@@ -384,9 +384,9 @@ def _mtime(path: Path) -> float:
         return -1.0
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run the reasoner (see `--help`)."""
-    return run_agent(Reasoner, argv)
+    return run_agent(Reasoner, argv, prog)
 
 
 if __name__ == "__main__":

@@ -26,6 +26,9 @@ from space import SpaceError, SpaceMirror, TripleSpace, check_can_listen, read_t
 
 STORE_STARTUP = 30.0
 TICK = 0.1
+# Firings a frame reads: in log mode each one is printed once, so a burst of answers
+# between two frames must not push one out unprinted.
+FIRINGS_SHOWN = 100
 
 
 @dataclass(frozen=True)
@@ -74,6 +77,7 @@ class Deployment:
         )
         self.mirror = SpaceMirror()
         self.bad_values = BadValues(view.event)
+        self._said: dict[str, str] = {}  # firings' sentences by changeset id
         self._view_failure = ""
         self.scenario: ScenarioRun | None = None
         self.robot = launch.robots[0] if launch.robots else "robot1"
@@ -267,7 +271,7 @@ class Deployment:
         return Frame(
             header=header,
             robots=read_robots(graph, self.bad_values),
-            firings=read_firings(self.mirror.recent(), graph=graph),
+            firings=read_firings(self.mirror.recent(), FIRINGS_SHOWN, graph, self._said),
             processes=self.supervisor.status(),
             footer=self.scenario.progress if self.scenario else "Ctrl-C stops everything.",
         )

@@ -217,12 +217,20 @@ def _noise(triple: Triple) -> bool:
 
 
 def read_firings(
-    records: Iterable[ChangeRecord], limit: int = 20, graph: Graph | None = None
+    records: Iterable[ChangeRecord],
+    limit: int = 20,
+    graph: Graph | None = None,
+    said: dict[str, str] | None = None,
 ) -> list[Firing]:
     """Return the last `limit` changesets that name a cause, newest first.
 
-    With `graph` (the space now), each is also said as a sentence.
+    With `graph` (the space now), each is also said as a sentence; `said`
+    remembers the sentences by changeset id, so that a view redrawn on every
+    change words each firing once.
     """
+    said = {} if said is None else said
+    if len(said) > 10 * limit:
+        said.clear()
     records = list(records)
     by_id = {r.id: r for r in records}
     firings = []
@@ -242,16 +250,27 @@ def read_firings(
                 removed=tuple(describe(t) for t in record.removed if not _noise(t)),
                 cause_agent=cause.agent if cause else None,
                 cause=tuple(describe(t) for t in cause.added if not _noise(t)) if cause else (),
-                sentence=""
-                if graph is None
-                else firing_sentence(
-                    cause.added if cause else (), record.added, record.removed, graph, names
-                ),
+                sentence="" if graph is None else _said(record, cause, graph, names, said),
             )
         )
         if len(firings) == limit:
             break
     return firings
+
+
+def _said(
+    record: ChangeRecord,
+    cause: ChangeRecord | None,
+    graph: Graph,
+    names: list[str],
+    said: dict[str, str],
+) -> str:
+    sentence = said.get(record.id)
+    if sentence is None:
+        because = cause.added if cause else ()
+        sentence = firing_sentence(because, record.added, record.removed, graph, names)
+        said[record.id] = sentence
+    return sentence
 
 
 def task_named(graph: Graph, task_type: str) -> URIRef | None:

@@ -20,7 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "'- s p o' lines, '[inferred]' marking the inferred graph, until Ctrl-C.",
     )
     p.add_argument("template", nargs="?", metavar="TEMPLATE", help="e.g. '?s ac:battery_level ?o'")
-    add_connect(p)
+    add_connect(p, space=None)
     p.set_defaults(func=run)
 
 

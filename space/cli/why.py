@@ -36,7 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--limit", type=int, default=20, metavar="N", help="explain at most N triples (default 20)"
     )
-    add_connect(p)
+    add_connect(p, space=None)
     p.set_defaults(func=run)
 
 
