@@ -21,10 +21,10 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import ClassVar
 
 import zenoh
-from rdflib import URIRef
 from rdflib.term import Node
 
-from agents.view import AC, RECORD_PREFIX, View
+from agents.view import View
+from agents.vocabulary import RECORD_PREFIX, local_name, robot_iri
 from space import (
     Change,
     SpaceError,
@@ -38,18 +38,6 @@ from space import (
 )
 
 Values = Mapping[tuple[Node, Node], Node | None]
-
-
-def robot_iri(text: str) -> URIRef:
-    """Return the IRI of a robot given as an IRI, `ac:name` or a bare local name."""
-    if "://" in text or text.startswith("urn:"):
-        return URIRef(text)
-    return AC[text.removeprefix("ac:")]
-
-
-def local_name(iri: URIRef) -> str:
-    """Return the part of an IRI after its last `#` or `/`."""
-    return str(iri).rsplit("#", 1)[-1].rsplit("/", 1)[-1]
 
 
 class SimClock:
@@ -202,10 +190,10 @@ class Agent:
 
     def _handle(self, change: Change) -> None:
         if self.keeps_view:
-            self.view.apply(change)
+            self.view.apply(change, snapshot=not self.started)
         if not self.started:
             self.started = True
-            self.log.info("view rebuilt from the space: %d triples", len(self.view.graph))
+            self.log.info("view rebuilt from the space: %d triples", len(self.view))
             self._guarded(self.on_start, "start")
         else:
             self._guarded(lambda: self.on_change(change), f"change {change.id}")

@@ -25,7 +25,7 @@ from agents.base import Agent, run_agent
 from agents.behavior import Behavior
 from agents.hw_monitor import HwMonitor
 from agents.nav_monitor import NavMonitor
-from agents.view import AC
+from agents.vocabulary import AC
 from space import Change, TripleSpace, declare_agent
 
 KINDS: dict[str, type[Agent]] = {

@@ -28,11 +28,20 @@ import zenoh
 from rdflib import OWL, RDF, URIRef
 from rdflib.term import Node
 
-from agents.base import Agent, local_name, run_agent
+from agents.base import Agent, run_agent
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
 from agents.ownership import PREFIX, Roster, concerned_robot
-from agents.view import AC
-from space import Change, Pending, SpaceError, Subscription, Triple, refreeze, triple_to_nt
+from agents.vocabulary import AC, local_name
+from space import (
+    Change,
+    Pending,
+    SpaceError,
+    Subscription,
+    Triple,
+    refreeze,
+    replace_functional,
+    triple_to_nt,
+)
 from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
 
 REPO = Path(__file__).resolve().parents[1]
@@ -212,12 +221,14 @@ class Reasoner(Agent):
         The store replaces them too; doing it here keeps the engine's state the
         store's even when a writer did not say what it replaced.
         """
-        engine, out = self.engine, []
+        engine = self.engine
         assert engine is not None
-        for s, p, o in added:
-            if (p, RDF.type, OWL.FunctionalProperty) in engine:
-                out += [t for t in engine.match(s, p) if t[2] != o and t not in removed]
-        return out
+        change = replace_functional(
+            added,
+            lambda p: (p, RDF.type, OWL.FunctionalProperty) in engine,
+            lambda s, p: [t[2] for t in engine.match(s, p)],
+        )
+        return [t for t in change.replaced if t not in removed]
 
     def _write(
         self,

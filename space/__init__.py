@@ -17,6 +17,7 @@ from space.errors import (
     SpaceUnavailable,
     TemplateError,
 )
+from space.functional import Replacement, declares_functional, replace_functional
 from space.heap import freeze_startup, refreeze
 from space.keys import ROOT as KEY_ROOT
 from space.keys import escape as escape_key_chunk
@@ -47,6 +48,7 @@ __all__ = [
     "Pending",
     "PrefixMap",
     "QueryError",
+    "Replacement",
     "SpaceError",
     "SpaceMirror",
     "SpaceTimeout",
@@ -62,6 +64,7 @@ __all__ = [
     "any_free_port",
     "check_can_listen",
     "declare_agent",
+    "declares_functional",
     "default_data_dir",
     "escape_key_chunk",
     "freeze_startup",
@@ -69,6 +72,7 @@ __all__ = [
     "probe_port",
     "read_turtle",
     "refreeze",
+    "replace_functional",
     "triple_to_nt",
     "unescape_key_chunk",
     "watch_agents",

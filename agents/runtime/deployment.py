@@ -224,7 +224,7 @@ class Deployment:
             print(f"scenario {run.scenario.name}: completed", flush=True)
             return 0
         if run.failure is not None:
-            robots = read_robots(self.mirror.graph(), self.bad_values)
+            robots = read_robots(self.mirror.copy(), self.bad_values)
             state = "; ".join(robot_line(r) for r in robots) or "no robot in the space"
             print(
                 f"tspace up: scenario {run.scenario.name} failed: {run.failure} (now: {state})",
@@ -250,7 +250,7 @@ class Deployment:
             header += f", HMI {url}"
         return Frame(
             header=header,
-            robots=read_robots(self.mirror.graph(), self.bad_values),
+            robots=read_robots(self.mirror.copy(), self.bad_values),
             firings=read_firings(self.mirror.recent()),
             processes=self.supervisor.status(),
             footer=self.scenario.progress if self.scenario else "Ctrl-C stops everything.",

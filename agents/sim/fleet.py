@@ -11,10 +11,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rdflib import RDF, RDFS, Graph, Literal, Namespace, URIRef
+from rdflib import RDF, RDFS, Graph, Literal, URIRef
 from rdflib.term import Node
 
-AC = Namespace("https://w3id.org/tspace/selfconfig#")
+from agents.vocabulary import AC
+
 ROBOTS = Path(__file__).resolve().parents[2] / "ontology" / "robots"
 HOSPITAL_FLEET = ROBOTS / "hospital_fleet.ttl"
 
