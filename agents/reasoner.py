@@ -31,6 +31,7 @@ from rdflib.term import Node
 from agents.base import Agent, run_agent
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
 from agents.ownership import PREFIX, Roster, concerned_robot
+from agents.resources import data_file
 from agents.vocabulary import AC, local_name
 from space import (
     Change,
@@ -44,7 +45,6 @@ from space import (
 )
 from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
 
-REPO = Path(__file__).resolve().parents[1]
 ONTOLOGY_IRI = URIRef("https://w3id.org/tspace/selfconfig")
 RELOAD_PERIOD = 1.0
 IN_FLIGHT = 64  # answers sent, not yet acknowledged, at most
@@ -114,12 +114,12 @@ class Reasoner(Agent):
     @property
     def rules_files(self) -> list[Path]:
         """Return the rules files given, or the default one."""
-        return self.args.rules or [REPO / "rules" / "selfconfig.rules"]
+        return self.args.rules or [data_file("rules/selfconfig.rules")]
 
     @property
     def ontology_files(self) -> list[Path]:
         """Return the ontology files given, or the default one."""
-        return self.args.ontology or [REPO / "ontology" / "selfconfig.ttl"]
+        return self.args.ontology or [data_file("ontology/selfconfig.ttl")]
 
     # Start
 

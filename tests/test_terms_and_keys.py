@@ -75,7 +75,13 @@ def test_key_with_unknown_prefix_is_rejected():
         parse_triple_key("tspace/s/t/zz:a/zz:b/zz:c", PrefixMap())
 
 
-TRICKY = ["café \"x\"", "naïve\\path", "tab\there\nnewline", "日本語 ☃ 𝄞", "quote ' and \\u0041 literal"]
+TRICKY = [
+    'café "x"',
+    "naïve\\path",
+    "tab\there\nnewline",
+    "日本語 ☃ 𝄞",
+    "quote ' and \\u0041 literal",
+]
 
 
 def test_every_string_round_trips_through_the_term_codec():
