@@ -11,7 +11,7 @@ from __future__ import annotations
 import io
 import logging
 from collections.abc import Iterable, Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from types import TracebackType
 
 import zenoh
@@ -92,16 +92,21 @@ class TripleSpace:
             raise
 
     def close(self) -> None:
-        """Undeclare every subscription and close the session if this handle opened it."""
-        for sub in list(self._subscriptions):
-            sub.close()
-        self._subscriptions.clear()
-        for watchdog in self._watchdogs:
-            watchdog.undeclare()
-        self._watchdogs = []
-        self._dispatcher.close()
-        if self._owns_session:
-            self.session.close()
+        """Undeclare every subscription and close the session if this handle opened it.
+
+        Each step runs even when an earlier one raised (its error is re-raised after):
+        a session left open keeps the process from exiting.
+        """
+        subscriptions, self._subscriptions = list(self._subscriptions), set()
+        watchdogs, self._watchdogs = self._watchdogs, []
+        with ExitStack() as steps:  # run in reverse: subscriptions first, the session last
+            if self._owns_session:
+                steps.callback(self.session.close)
+            steps.callback(self._dispatcher.close)
+            for watchdog in watchdogs:
+                steps.callback(watchdog.undeclare)
+            for sub in subscriptions:
+                steps.callback(sub.close)
 
     def __enter__(self) -> TripleSpace:
         return self
