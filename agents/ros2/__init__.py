@@ -7,4 +7,13 @@ from agents.ros2.attachment import Attachment
 from agents.ros2.codec import Codec
 from agents.ros2.rmw import Endpoint, Entity, EntityKind, Qos, data_key, parse_token
 
-__all__ = ["Attachment", "Codec", "Endpoint", "Entity", "EntityKind", "Qos", "data_key", "parse_token"]
+__all__ = [
+    "Attachment",
+    "Codec",
+    "Endpoint",
+    "Entity",
+    "EntityKind",
+    "Qos",
+    "data_key",
+    "parse_token",
+]

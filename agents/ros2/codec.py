@@ -35,7 +35,14 @@ _DTYPES = {
     "uint16": np.uint16, "int16": np.int16, "uint32": np.uint32, "int32": np.int32,
     "uint64": np.uint64, "int64": np.int64, "float32": np.float32, "float64": np.float64,
 }  # fmt: skip
-_DECODE_ERRORS = (SerdeError, struct.error, IndexError, ValueError, UnicodeDecodeError, AssertionError)
+_DECODE_ERRORS = (
+    SerdeError,
+    struct.error,
+    IndexError,
+    ValueError,
+    UnicodeDecodeError,
+    AssertionError,
+)
 
 
 def _uint8_for_char(desc: Any) -> Any:

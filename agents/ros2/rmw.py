@@ -53,7 +53,7 @@ def join_name(namespace: str, name: str) -> str:
         ValueError: the result is not a valid ROS name.
     """
     full = name if name.startswith("/") else f"{namespace.rstrip('/')}/{name}"
-    if not _NAME_RE.match(full) or "//" in full or full.endswith("/") and full != "/":
+    if not _NAME_RE.match(full) or "//" in full or (full.endswith("/") and full != "/"):
         raise ValueError(f"not a valid ROS name: {full!r}")
     return full
 
