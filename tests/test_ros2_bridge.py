@@ -1,0 +1,245 @@
+"""The ROS 2 bridge as a process, against the stand-in rmw_zenoh robot (tests/ros2robot.py)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import zenoh
+from agentprocs import knowledge, value
+from rdflib import Literal, Namespace
+from rosbags.typesys import Stores, get_typestore
+
+from conftest import AC_NS, REPO, wait_for
+from ros2robot import HASH, typestore
+
+AC = Namespace(AC_NS)
+MAPPING = REPO / "deploy" / "hospital-ros2-mapping.toml"
+BATTERY_KEY = (
+    "0/robot1/battery_state/sensor_msgs::msg::dds_::BatteryState_/"
+    + HASH["sensor_msgs/msg/BatteryState"]
+)
+
+
+class StandIn:
+    """The stand-in robot as a child process, with what it received."""
+
+    def __init__(self, endpoint: str, tmp: Path, *args: str) -> None:
+        self.record = tmp / "robot.jsonl"
+        self.log = tmp / "robot.log"
+        argv = [sys.executable, str(REPO / "tests" / "ros2robot.py"), "--connect", endpoint]
+        with open(self.log, "ab") as log:
+            self.proc = subprocess.Popen(
+                [*argv, "--record", str(self.record), *args],
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,
+            )
+
+    def received(self) -> list[dict]:
+        if not self.record.exists():
+            return []
+        return [json.loads(line) for line in self.record.read_text().splitlines() if line]
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+
+
+@pytest.fixture
+def space(ts):
+    ts.write(knowledge())
+    return ts
+
+
+@pytest.fixture
+def standin(server, tmp_path):
+    robots: list[StandIn] = []
+
+    def start(*args: str) -> StandIn:
+        robots.append(StandIn(server.endpoint, tmp_path, *args))
+        return robots[-1]
+
+    yield start
+    for robot in robots:
+        robot.close()
+
+
+def bridge(launch, *args: str):
+    return launch.start("ros2", "--mapping", str(MAPPING), "--tick", "0.05", *args)
+
+
+def mode(ts, device: str) -> str | None:
+    found = value(ts, AC[device], AC.actual_mode)
+    return None if found is None else str(found)
+
+
+def test_battery_state_becomes_the_robots_battery_facts(space, launch, standin):
+    robot = standin("--charge", "62", "--rate", "20")
+    proc = bridge(launch)
+    wait_for(lambda: value(space, AC.robot1_battery, AC.charge_percent) == Literal(60), 20,
+             "charge 60 from BatteryState", proc.logs)  # fmt: skip
+    assert value(space, AC.robot1_battery, AC.battery_level) == Literal("normal")
+    # Diagnostics: faults of every mapped device, modes of the unmanaged ones.
+    wait_for(lambda: value(space, AC.robot1_laser, AC.fault) == Literal("none"), 10)
+    assert mode(space, "robot1_wheels") == "active"
+    # The managed nodes report their lifecycle state: active.
+    wait_for(lambda: mode(space, "robot1_screen") == "active", 10, "screen's mode", proc.logs)
+    assert value(space, AC.robot1_screen, AC.ros_status) == Literal("ok")
+    robot.close()
+
+
+def test_running_modes_drive_lifecycle_transitions_and_the_node_reports(space, launch, standin):
+    robot = standin()
+    proc = bridge(launch)
+    wait_for(lambda: mode(space, "robot1_speakers") == "active", 20, "speakers up", proc.logs)
+    for device in ("robot1_screen", "robot1_speakers", "robot1_microphone"):
+        space.write([(AC[device], AC.running_mode, Literal("stand-by"))])
+    for device in ("robot1_screen", "robot1_speakers", "robot1_microphone"):
+        wait_for(lambda d=device: mode(space, d) == "stand-by", 10, f"{device} inactive", proc.logs)
+    calls = [r for r in robot.received() if r.get("service", "").endswith("/change_state")]
+    store = typestore()
+    transitions = {
+        (r["service"], store.deserialize_cdr(bytes.fromhex(r["payload"]),
+                                             "lifecycle_msgs/srv/ChangeState_Request").transition.id)
+        for r in calls
+    }  # fmt: skip
+    assert transitions == {(f"/robot1/{n}/change_state", 4) for n in ("screen", "speakers", "microphone")}
+    space.write([(AC.robot1_screen, AC.running_mode, Literal("disabled"))])
+    wait_for(lambda: mode(space, "robot1_screen") == "disabled", 10, "screen cleaned up")
+    space.write([(AC.robot1_screen, AC.running_mode, Literal("active"))])
+    wait_for(lambda: mode(space, "robot1_screen") == "active", 10, "screen back (configure, activate)")
+
+
+def test_an_unanswered_lifecycle_call_is_reported(space, launch, standin):
+    standin("--managed", "screen", "speakers")  # no microphone node
+    proc = bridge(launch)
+    wait_for(
+        lambda: str(value(space, AC.robot1_microphone, AC.ros_status) or "").startswith(
+            "/robot1/microphone/get_state: no answer"
+        ),
+        20,
+        "a timeout reported",
+        proc.logs,
+    )
+    assert mode(space, "robot1_microphone") is None
+    assert proc.alive()
+
+
+def test_what_the_bridge_sends_decodes_with_rosbags_and_carries_an_attachment(
+    space, launch, standin
+):
+    robot = standin()
+    proc = bridge(launch)
+    wait_for(lambda: mode(space, "robot1_screen") == "active", 20, "bridge up", proc.logs)
+    space.write([(AC.robot1_base, AC.motion_speed, Literal("low"))])
+    space.write([(AC.robot1, AC.current_task, AC.task_charging)])
+
+    def sent(kind: str) -> list[dict]:
+        return [r for r in robot.received() if kind in (r.get("topic"), r.get("service"))]
+
+    wait_for(lambda: sent("/robot1/speed_limit") and sent("/robot1/current_task"), 10,
+             "speed limit and task received", proc.logs)  # fmt: skip
+    wait_for(lambda: sent("/robot1/controller_server/set_parameters"), 10, "parameter set")
+    jazzy = get_typestore(Stores.ROS2_JAZZY)
+    store = typestore()
+    speeds = {"low": 0.2}
+    for level in space.query((None, AC.level, Literal("low"))).subjects():
+        mps = value(space, level, AC.meters_per_second)
+        if mps is not None:
+            speeds["low"] = float(mps)
+    for record in robot.received():
+        payload, att = bytes.fromhex(record["payload"]), bytes.fromhex(record["attachment"])
+        ros_type = record["type"] + ("_Request" if "service" in record else "")
+        message = store.deserialize_cdr(payload, ros_type)
+        assert bytes(store.serialize_cdr(message, ros_type)) == payload  # byte for byte
+        assert len(att) == 33 and att[16] == 16
+        assert record["key"].endswith(HASH[record["type"]])
+        if record.get("topic") == "/robot1/speed_limit":
+            assert message.percentage is False
+            assert message.speed_limit == pytest.approx(speeds["low"])
+        if record.get("topic") == "/robot1/current_task":
+            assert message.data == "Charging"
+            assert bytes(jazzy.serialize_cdr(message, "std_msgs/msg/String")) == payload
+
+
+def test_malformed_cdr_and_unknown_types_are_logged_and_skipped(space, launch, server):
+    proc = bridge(launch)
+    with zenoh.open(client_config(server.endpoint)) as session:
+        wait_for(lambda: "ROS 2 node" in proc.logs(), 20, "bridge up", proc.logs)
+        session.put(BATTERY_KEY, b"\x00\x01\x00\x00\x05")  # truncated
+        session.put(BATTERY_KEY, b"garbage")  # no encapsulation header
+        other = "0/robot1/battery_state/std_msgs::msg::dds_::String_/" + HASH["std_msgs/msg/String"]
+        session.put(other, b"\x00\x01\x00\x00\x03\x00\x00\x00hi\x00")
+        wait_for(lambda: "unexpected type std_msgs/msg/String" in proc.logs(), 10, "type logged")
+        wait_for(lambda: proc.logs().count("malformed message skipped") >= 2, 10, "CDR logged")
+        # Still alive and still bridging: a good message after the bad ones is taken.
+        store = get_typestore(Stores.ROS2_JAZZY)
+        msg = store.types["sensor_msgs/msg/BatteryState"]
+        good = bytes(store.serialize_cdr(battery(store, msg, 0.31), "sensor_msgs/msg/BatteryState"))
+        session.put(BATTERY_KEY, good)
+        wait_for(lambda: value(space, AC.robot1_battery, AC.charge_percent) == Literal(30), 10)
+    assert proc.alive()
+
+
+def test_the_bridge_is_on_the_ros_graph(space, launch, server):
+    proc = bridge(launch)
+    with zenoh.open(client_config(server.endpoint)) as session:
+        def tokens() -> list[str]:
+            return [str(r.ok.key_expr) for r in session.liveliness().get("@ros2_lv/0/**") if r.ok]
+
+        wait_for(lambda: len(tokens()) >= 1 + 2 + 2 + 7, 20, "bridge's tokens", proc.logs)
+        found = tokens()
+    zid_chunks = {t.split("/")[2] for t in found}
+    assert len(zid_chunks) == 1
+    kinds = sorted(t.split("/")[5] for t in found)
+    assert kinds.count("NN") == 1 and kinds.count("MS") == 2 and kinds.count("MP") == 2
+    assert kinds.count("SC") == 7
+    node = next(t for t in found if t.split("/")[5] == "NN")
+    assert node.split("/")[6:] == ["%", "%robot1", "tspace_bridge"]
+    sub = next(t for t in found if "%robot1%battery_state" in t)
+    assert sub.split("/")[5:] == [
+        "MS", "%", "%robot1", "tspace_bridge", "%robot1%battery_state",
+        "sensor_msgs::msg::dds_::BatteryState_", HASH["sensor_msgs/msg/BatteryState"],
+        "::,10:,:,:,,",
+    ]  # fmt: skip
+    client = next(t for t in found if "%robot1%screen%change_state" in t)
+    assert client.split("/")[10:12] == [
+        "lifecycle_msgs::srv::dds_::ChangeState_", HASH["lifecycle_msgs/srv/ChangeState"]
+    ]
+
+
+def test_a_bad_mapping_is_a_clear_error(space, launch, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[battery]]\ntopic = "battery_state"\ndevice = 3\n')
+    proc = launch.start("ros2", "--mapping", str(bad))
+    assert proc.proc is not None and proc.proc.wait(timeout=20) == 1
+    assert "[[battery]] device must be a non-empty string, got 3" in proc.logs()
+
+
+def client_config(endpoint: str) -> zenoh.Config:
+    conf = zenoh.Config()
+    conf.insert_json5("mode", '"client"')
+    conf.insert_json5("connect/endpoints", json.dumps([endpoint]))
+    return conf
+
+
+def battery(store, cls, fraction: float):
+    import numpy as np
+
+    t = store.types
+    header = t["std_msgs/msg/Header"](stamp=t["builtin_interfaces/msg/Time"](sec=1, nanosec=0),
+                                      frame_id="")  # fmt: skip
+    empty = np.array([], dtype=np.float32)
+    return cls(header=header, voltage=0.0, temperature=0.0, current=0.0, charge=0.0,
+               capacity=0.0, design_capacity=0.0, percentage=fraction, power_supply_status=2,
+               power_supply_health=0, power_supply_technology=0, present=True,
+               cell_voltage=empty, cell_temperature=empty, location="", serial_number="")  # fmt: skip
