@@ -32,14 +32,21 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 # Published RIHS01 hashes (Jazzy): see tests/test_ros2_wire.py for where each comes from.
 HASH = {
-    "sensor_msgs/msg/BatteryState": "RIHS01_4bee5dfce981c98faa6828b868307a0a73f992ed0789f374ee96c8f840e69741",
-    "diagnostic_msgs/msg/DiagnosticArray": "RIHS01_5a8a36efb05fb25070fa0fb3810290c0e6cd4862b54a8fb975a1ee8dc55a333e",
-    "std_msgs/msg/String": "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18",
-    "nav2_msgs/msg/SpeedLimit": "RIHS01_83d8e4e842559f4d9a988b19d31b162216ec738536389f98438d1a166f91845a",
-    "lifecycle_msgs/srv/ChangeState": "RIHS01_356fe34f0475a43acf54542013af4167b0e729f77ea22ffb045c6ad8e20668e5",
-    "lifecycle_msgs/srv/GetState": "RIHS01_800a0a5aae599782b02932de0caf563f6dc4e7e94b794eadde075ba2cbef9795",
-    "rcl_interfaces/srv/SetParameters": "RIHS01_56eed9a67e169f9cb6c1f987bc88f868c14a8fc9f743a263bc734c154015d7e0",
-}  # fmt: skip
+    "sensor_msgs/msg/BatteryState": "RIHS01_4bee5dfce981c98faa6828b868307a0a"
+    "73f992ed0789f374ee96c8f840e69741",
+    "diagnostic_msgs/msg/DiagnosticArray": "RIHS01_5a8a36efb05fb25070fa0fb3810290c0"
+    "e6cd4862b54a8fb975a1ee8dc55a333e",
+    "std_msgs/msg/String": "RIHS01_df668c740482bbd48fb39d76a70dfd4b"
+    "d59db1288021743503259e948f6b1a18",
+    "nav2_msgs/msg/SpeedLimit": "RIHS01_83d8e4e842559f4d9a988b19d31b1622"
+    "16ec738536389f98438d1a166f91845a",
+    "lifecycle_msgs/srv/ChangeState": "RIHS01_356fe34f0475a43acf54542013af4167"
+    "b0e729f77ea22ffb045c6ad8e20668e5",
+    "lifecycle_msgs/srv/GetState": "RIHS01_800a0a5aae599782b02932de0caf563f"
+    "6dc4e7e94b794eadde075ba2cbef9795",
+    "rcl_interfaces/srv/SetParameters": "RIHS01_56eed9a67e169f9cb6c1f987bc88f868"
+    "c14a8fc9f743a263bc734c154015d7e0",
+}
 LABELS = {1: "unconfigured", 2: "inactive", 3: "active", 4: "finalized"}
 # transition id -> (from state, to state), lifecycle_msgs/msg/Transition
 TRANSITIONS = {1: (1, 2), 2: (2, 1), 3: (2, 3), 4: (3, 2)}
@@ -101,7 +108,7 @@ class Robot:
         self.parameters: dict[str, float] = {}
         self.lock = threading.Lock()
         self.stopped = threading.Event()
-        self.record = open(args.record, "a", encoding="utf-8") if args.record else None  # noqa: SIM115
+        self.record = open(args.record, "a", encoding="utf-8") if args.record else None
         self.owned: list[Any] = []
         self.eid = 0
 
@@ -188,8 +195,8 @@ class Robot:
             self.log(service=f"{self.ns}/{name}", type=srv_type, payload=payload.hex(),
                      attachment=att.hex(), key=str(query.key_expr))  # fmt: skip
 
-        queryable = self.session.declare_queryable(self.key(name, srv_type), on_query, complete=True)
-        self.owned.append(queryable)
+        key = self.key(name, srv_type)
+        self.owned.append(self.session.declare_queryable(key, on_query, complete=True))
 
     def answer(self, srv_type: str, device: str, request: Any) -> Any:
         types = self.store.types
@@ -206,7 +213,8 @@ class Robot:
         results = []
         for parameter in request.parameters:
             self.parameters[parameter.name] = parameter.value.double_value
-            results.append(types["rcl_interfaces/msg/SetParametersResult"](successful=True, reason=""))
+            result = types["rcl_interfaces/msg/SetParametersResult"]
+            results.append(result(successful=True, reason=""))
         return types["rcl_interfaces/srv/SetParameters_Response"](results=results)
 
     def step(self, dt: float) -> None:
