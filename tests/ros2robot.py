@@ -71,9 +71,7 @@ def typestore() -> Any:
             "lifecycle_msgs/srv/GetState_Request": body(
                 "uint8 structure_needs_at_least_one_member\n", "lifecycle_msgs"
             ),
-            "lifecycle_msgs/srv/GetState_Response": body(
-                "State current_state\n", "lifecycle_msgs"
-            ),
+            "lifecycle_msgs/srv/GetState_Response": body("State current_state\n", "lifecycle_msgs"),
             "rcl_interfaces/srv/SetParameters_Request": body(
                 "Parameter[] parameters\n", "rcl_interfaces"
             ),

@@ -205,6 +205,7 @@ def test_malformed_cdr_and_unknown_types_are_logged_and_skipped(space, launch, s
 def test_the_bridge_is_on_the_ros_graph(space, launch, server):
     proc = bridge(launch)
     with zenoh.open(client_config(server.endpoint)) as session:
+
         def tokens() -> list[str]:
             return [str(r.ok.key_expr) for r in session.liveliness().get("@ros2_lv/0/**") if r.ok]
 
@@ -225,7 +226,8 @@ def test_the_bridge_is_on_the_ros_graph(space, launch, server):
     ]  # fmt: skip
     client = next(t for t in found if "%robot1%screen%change_state" in t)
     assert client.split("/")[10:12] == [
-        "lifecycle_msgs::srv::dds_::ChangeState_", HASH["lifecycle_msgs/srv/ChangeState"]
+        "lifecycle_msgs::srv::dds_::ChangeState_",
+        HASH["lifecycle_msgs/srv/ChangeState"],
     ]
 
 
