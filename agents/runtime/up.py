@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from space.zconfig import DEFAULT_ENDPOINT
+from space import DEFAULT_ENDPOINT
 
 ORDER = 10
 DEFAULT_LAUNCH = Path("deploy/hospital.toml")
@@ -59,12 +59,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the deployment until Ctrl-C, SIGTERM, or the end of a `--once` scenario."""
-    from space.deployment import Deployment, Options
-    from space.errors import InputError
-    from space.launch import read_launch
-    from space.liveview import LiveView
-    from space.paths import default_data_dir, shipped
-    from space.scenario import SCENARIOS
+    from agents.resources import shipped
+    from agents.runtime.deployment import Deployment, Options
+    from agents.runtime.launch import read_launch
+    from agents.runtime.liveview import LiveView
+    from agents.runtime.scenario import SCENARIOS
+    from space import InputError, default_data_dir
 
     if args.once and not args.scenario:
         raise InputError("--once needs --scenario")
