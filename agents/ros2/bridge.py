@@ -117,6 +117,9 @@ class Ros2Bridge(Agent):
 
     def shutdown(self) -> None:
         """Stop the drivers, leave the ROS graph, then close the space."""
+        if self.topics:
+            received = sum(t.received for t in self.topics)
+            self.log.info("received %d messages on %d topics", received, len(self.topics))
         for driver in [*self.managed.values(), *self.parameters.values()]:
             driver.close()
         if self.node is not None:
