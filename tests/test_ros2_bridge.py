@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
+from decimal import Decimal
 from pathlib import Path
 
 import pytest
@@ -258,3 +260,81 @@ def battery(store, cls, fraction: float):
                power_supply_health=0, power_supply_technology=0, present=True,
                cell_voltage=empty, cell_temperature=empty, location="",
                serial_number="")  # fmt: skip
+
+
+PLACE_AND_POSE = """
+[ros]
+namespace = "/{robot}"
+[[place]]
+topic = "place"
+[[pose]]
+topic = "pose"
+max_rate = 2.0
+"""
+
+
+def test_a_100hz_topic_is_rate_limited_and_change_filtered(space, launch, server, tmp_path):
+    mapping = tmp_path / "mapping.toml"
+    mapping.write_text(PLACE_AND_POSE)
+    proc = launch.start("ros2", "--mapping", str(mapping), "--tick", "0.05")
+    store = get_typestore(Stores.ROS2_JAZZY)
+    writes: list[object] = []
+    sub = space.subscribe((AC.robot1, AC.position_x, None), lambda c: writes.extend(c.added))
+    with zenoh.open(client_config(server.endpoint)) as session:
+        wait_for(lambda: "ROS 2 node" in proc.logs(), 20, "bridge up", proc.logs)
+        pose_key = "0/robot1/pose/geometry_msgs::msg::dds_::PoseStamped_/" + (
+            "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8"
+        )
+        place_key = "0/robot1/place/std_msgs::msg::dds_::String_/" + HASH["std_msgs/msg/String"]
+
+        def pose(x: float) -> bytes:
+            t = store.types
+            msg = t["geometry_msgs/msg/PoseStamped"](
+                header=t["std_msgs/msg/Header"](
+                    stamp=t["builtin_interfaces/msg/Time"](sec=1, nanosec=0), frame_id="map"
+                ),
+                pose=t["geometry_msgs/msg/Pose"](
+                    position=t["geometry_msgs/msg/Point"](x=x, y=2.0, z=0.0),
+                    orientation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
+                ),
+            )
+            return bytes(store.serialize_cdr(msg, "geometry_msgs/msg/PoseStamped"))
+
+        def place(name: str) -> bytes:
+            msg = store.types["std_msgs/msg/String"](data=name)
+            return bytes(store.serialize_cdr(msg, "std_msgs/msg/String"))
+
+        # 100 Hz of the same pose: one write.
+        for _ in range(50):
+            session.put(pose_key, pose(1.0))
+            time.sleep(0.01)
+        wait_for(lambda: value(space, AC.robot1, AC.position_x) is not None, 10, "first pose")
+        assert len(writes) == 1
+        # 100 Hz for one second of a moving robot: at most 2 writes a second, and the
+        # last pose is the one the space keeps.
+        start = time.monotonic()
+        for i in range(100):
+            session.put(pose_key, pose(1.0 + (i + 1) * 0.01))
+            time.sleep(0.01)
+        elapsed = time.monotonic() - start
+        wait_for(lambda: value(space, AC.robot1, AC.position_x) == Literal(Decimal("2.00")), 10,
+                 "the last pose written", proc.logs)  # fmt: skip
+        assert 2 <= len(writes) <= 1 + 2 * (elapsed + 1), writes
+        # A named place becomes the location; an unknown one is skipped.
+        session.put(place_key, place("nowhere"))
+        session.put(place_key, place("room_101"))
+        wait_for(lambda: value(space, AC.robot1, AC.location) == AC.room_101, 10, "location")
+    sub.close()
+
+
+def test_domains_and_namespaces_keep_robots_apart(space, launch, standin):
+    standin("--domain", "3", "--namespace", "/robot2", "--charge", "42")
+    standin("--domain", "0", "--namespace", "/robot2", "--charge", "91")
+    proc = launch.start("ros2", "--mapping", str(MAPPING), "--robot", "robot2", "--domain", "3")
+    wait_for(lambda: value(space, AC.robot2_battery, AC.charge_percent) == Literal(40), 20,
+             "robot2's battery on domain 3", proc.logs)  # fmt: skip
+    wait_for(lambda: mode(space, "robot2_screen") == "active", 10, "robot2's screen")
+    assert "ROS 2 node /robot2/tspace_bridge on domain 3" in proc.logs()
+    for _ in range(20):  # the domain-0 robot's 91 % never shows
+        assert value(space, AC.robot2_battery, AC.charge_percent) == Literal(40)
+        time.sleep(0.05)

@@ -136,7 +136,6 @@ class Ros2Bridge(Agent):
         assert self.ts is not None and self.mapping is not None and self.codec is not None
         m = self.mapping
         self._learn()
-        self.graph = Graph(self._on_graph).open(self.ts.session, m.domain)
         self.node = Node(
             self.ts.session, self.codec, m.domain, m.namespace, m.node, itertools.count()
         )
@@ -176,6 +175,8 @@ class Ros2Bridge(Agent):
             )
         for driver in [*self.managed.values(), *self.parameters.values()]:
             driver.start()
+        # Last: its callbacks read what was just built, from Zenoh's threads.
+        self.graph = Graph(self._on_graph).open(self.ts.session, m.domain)
         for device, driver in self.managed.items():
             wish = self._wish(device)
             self._wished[device] = wish
@@ -199,10 +200,8 @@ class Ros2Bridge(Agent):
         endpoint = entity.endpoint
         if entity.kind is EntityKind.SUBSCRIBER and endpoint is not None:
             for out in [*self.speed.values(), *self.tasks]:
-                if out.publisher.entity.endpoint == endpoint or (
-                    out.publisher.entity.endpoint is not None
-                    and out.publisher.entity.endpoint.name == endpoint.name
-                ):
+                ours = out.publisher.entity.endpoint
+                if ours is not None and ours.name == endpoint.name:
                     self.call_soon(lambda o=out: self._resend(o))
         elif entity.kind is EntityKind.PUBLISHER and endpoint is not None:
             for topic in self.topics:
@@ -244,7 +243,11 @@ class Ros2Bridge(Agent):
     def _on_message(self, topic: Topic, message: Any) -> None:
         """Turn a message into readings (on a Zenoh thread); hand over only what changed."""
         topic.received += 1
-        readings = self._readings(topic.spec, message)
+        try:
+            readings = self._readings(topic.spec, message)
+        except (ValueError, TypeError, AttributeError, OverflowError) as exc:
+            self.log.warning("%s: message skipped: %s", topic.spec.topic, exc)
+            return
         if readings and readings != topic.last:
             topic.last = readings
             self.call_soon(lambda: self._flush(topic))

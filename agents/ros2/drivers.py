@@ -82,6 +82,9 @@ class LatestWins:
                 reached = self.reach(self._wish)
             except (ServiceTimeout, ServiceFailed, MalformedPayload) as exc:
                 reached = self.failed(exc)
+            except Exception:  # the thread must outlive one bad answer; logged, retried
+                log.exception("%s failed; retrying", self.name)
+                reached = False
 
     def reach(self, wish: Any) -> bool:
         """Act toward `wish`; return True once it holds (False retries after `RETRY` s)."""
