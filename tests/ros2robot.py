@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import zenoh
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -237,8 +238,6 @@ class Robot:
             header=header, status=statuses))  # fmt: skip
 
     def battery(self, header: Any, status: int) -> Any:
-        import numpy as np
-
         return self.store.types["sensor_msgs/msg/BatteryState"](
             header=header, voltage=24.0, temperature=30.0, current=-1.0, charge=float("nan"),
             capacity=float("nan"), design_capacity=20.0, percentage=self.percent / 100.0,

@@ -9,6 +9,7 @@ import time
 from decimal import Decimal
 from pathlib import Path
 
+import numpy as np
 import pytest
 import zenoh
 from agentprocs import knowledge, value
@@ -16,6 +17,8 @@ from rdflib import Literal, Namespace
 from ros2robot import HASH, typestore
 from rosbags.typesys import Stores, get_typestore
 
+from agents.ros2.graph import Graph
+from agents.ros2.rmw import EntityKind
 from conftest import AC_NS, REPO, wait_for
 
 AC = Namespace(AC_NS)
@@ -249,8 +252,6 @@ def client_config(endpoint: str) -> zenoh.Config:
 
 
 def battery(store, cls, fraction: float):
-    import numpy as np
-
     t = store.types
     header = t["std_msgs/msg/Header"](stamp=t["builtin_interfaces/msg/Time"](sec=1, nanosec=0),
                                       frame_id="")  # fmt: skip
@@ -338,3 +339,21 @@ def test_domains_and_namespaces_keep_robots_apart(space, launch, standin):
     for _ in range(20):  # the domain-0 robot's 91 % never shows
         assert value(space, AC.robot2_battery, AC.charge_percent) == Literal(40)
         time.sleep(0.05)
+
+
+def test_the_graph_sees_the_robots_nodes_and_topics(server, standin):
+    standin()
+    with zenoh.open(client_config(server.endpoint)) as session:
+        graph = Graph().open(session, 0)
+        try:
+            wait_for(lambda: "/robot1/microphone" in graph.nodes(), 20, "the robot's nodes")
+            assert {"/robot1/robot_driver", "/robot1/screen", "/robot1/controller_server"} <= set(
+                graph.nodes()
+            )
+            topics = graph.topics()
+            assert topics["/robot1/battery_state"] == {"sensor_msgs/msg/BatteryState"}
+            assert topics["/robot1/speed_limit"] == {"nav2_msgs/msg/SpeedLimit"}
+            servers = graph.offers(EntityKind.SERVICE, "/robot1/screen/change_state")
+            assert [s.endpoint.ros_type for s in servers] == ["lifecycle_msgs/srv/ChangeState"]
+        finally:
+            graph.close()

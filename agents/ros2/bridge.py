@@ -17,7 +17,7 @@ import argparse
 import itertools
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 from typing import Any
 
 from rdflib import RDF, Literal, URIRef
@@ -63,7 +63,6 @@ class Outbound:
 
     publisher: Publisher
     last: Any = None
-    extra: dict[str, Any] = field(default_factory=dict)
 
 
 class Ros2Bridge(Agent):
@@ -109,7 +108,7 @@ class Ros2Bridge(Agent):
         if domain is None and os.environ.get("ROS_DOMAIN_ID", "").isdigit():
             domain = int(os.environ["ROS_DOMAIN_ID"])
         if domain is not None:
-            mapping = Mapping(**{**mapping.__dict__, "domain": domain})
+            mapping = replace(mapping, domain=domain)
         self.mapping, self.codec = mapping, Codec(mapping.distro)
         for spec in mapping.inbound:
             self.codec.type_hash(spec.ros_type)

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from agents.ros2.codec import DISTROS
 from agents.ros2.errors import MappingError
 from agents.ros2.rmw import join_name
 
@@ -213,9 +214,12 @@ def _mapping(data: dict[str, Any], robot: str) -> Mapping:
                 else _text(t["parameter"], robot, "[[speed_limit]] parameter"),
             )
         )
+    distro = ros.get("distro", "jazzy")
+    if distro not in DISTROS:
+        raise MappingError(f"[ros] distro must be one of {sorted(DISTROS)}, got {distro!r}")
     return Mapping(
         domain=domain,
-        distro=_text(ros.get("distro", "jazzy"), robot, "[ros] distro"),
+        distro=distro,
         namespace=namespace,
         node=_text(ros.get("node", "tspace_bridge"), robot, "[ros] node"),
         service_timeout=_number(ros.get("service_timeout", 2.0), "[ros] service_timeout"),

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import itertools
 import logging
-import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -45,7 +44,7 @@ class Publisher:
     sequence: int = 0
 
     def publish(self, message: Any) -> bytes:
-        """Publish a message; return the CDR sent. Thread-safe enough for one caller thread."""
+        """Publish a message; return the CDR sent. Call it from one thread (the bridge's loop)."""
         assert self.entity.endpoint is not None
         payload = self.codec.encode(self.entity.endpoint.ros_type, message)
         self.sequence += 1
@@ -131,7 +130,6 @@ class Node:
         self._zid = str(session.zid())
         self._node_id = next(ids)
         self._owned: list[Any] = []
-        self._lock = threading.Lock()
         self.entity = self._entity(EntityKind.NODE, None, self._node_id)
 
     def _entity(
