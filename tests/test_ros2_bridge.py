@@ -125,8 +125,8 @@ def test_running_modes_drive_lifecycle_transitions_and_the_node_reports(space, l
     wait_for(lambda: mode(space, "robot1_screen") == "active", 10, "screen configured, activated")
 
 
-def test_an_unanswered_lifecycle_call_is_reported(space, launch, standin):
-    standin("--managed", "screen", "speakers")  # no microphone node
+def test_an_unanswered_lifecycle_call_is_reported_then_retried(space, launch, standin):
+    standin("--managed", "screen", "speakers")  # no microphone node yet
     proc = bridge(launch)
     wait_for(
         lambda: str(value(space, AC.robot1_microphone, AC.ros_status) or "").startswith(
@@ -138,6 +138,13 @@ def test_an_unanswered_lifecycle_call_is_reported(space, launch, standin):
     )
     assert mode(space, "robot1_microphone") is None
     assert proc.alive()
+    # The microphone's node comes up: the bridge sees its service and asks at once.
+    standin("--managed", "microphone", "--unmanaged")
+    wait_for(lambda: mode(space, "robot1_microphone") == "active", 20, "microphone", proc.logs)
+    assert value(space, AC.robot1_microphone, AC.ros_status) == Literal("ok")
+    assert "managed node /robot1/microphone is up" in proc.logs()
+    # SIGTERM: the drivers stop, the node leaves the graph, the process exits cleanly.
+    assert proc.stop() == 0
 
 
 def test_what_the_bridge_sends_decodes_with_rosbags_and_carries_an_attachment(
