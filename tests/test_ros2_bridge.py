@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import struct
 import subprocess
 import sys
 import time
@@ -150,6 +151,7 @@ def test_an_unanswered_lifecycle_call_is_reported_then_retried(space, launch, st
 def test_what_the_bridge_sends_decodes_with_rosbags_and_carries_an_attachment(
     space, launch, standin
 ):
+    started_ns = time.time_ns()
     robot = standin()
     proc = bridge(launch)
     wait_for(lambda: mode(space, "robot1_screen") == "active", 20, "bridge up", proc.logs)
@@ -176,12 +178,17 @@ def test_what_the_bridge_sends_decodes_with_rosbags_and_carries_an_attachment(
              "low speed limit and task received", proc.logs)  # fmt: skip
     wait_for(lambda: sent("/robot1/controller_server/set_parameters"), 10, "parameter set")
     jazzy = get_typestore(Stores.ROS2_JAZZY)
+    writers: dict[str, list[tuple[int, bytes]]] = {}  # key -> (sequence, gid) in order
     for record in robot.received():
         payload, att = bytes.fromhex(record["payload"]), bytes.fromhex(record["attachment"])
         ros_type = record["type"] + ("_Request" if "service" in record else "")
         message = store.deserialize_cdr(payload, ros_type)
         assert bytes(store.serialize_cdr(message, ros_type)) == payload  # byte for byte
-        assert len(att) == 33 and att[16] == 16
+        # rmw_zenoh's attachment: int64 sequence, int64 source time (ns), length 16, GID.
+        sequence, stamp, length = struct.unpack_from("<qqB", att)
+        assert len(att) == 33 and length == 16
+        assert started_ns <= stamp <= time.time_ns()
+        writers.setdefault(record["key"], []).append((sequence, att[17:]))
         assert record["key"].endswith(HASH[record["type"]])
         if record.get("topic") == "/robot1/speed_limit":
             assert message.percentage is False
@@ -193,6 +200,11 @@ def test_what_the_bridge_sends_decodes_with_rosbags_and_carries_an_attachment(
         for r in sent("/robot1/current_task")
     ]
     assert tasks[-1] == "Charging"
+    # Each writer numbers its samples 1, 2, 3... (clients per request) under one GID.
+    for key, seen in writers.items():
+        assert [n for n, _ in seen] == list(range(1, len(seen) + 1)), key
+        assert len({gid for _, gid in seen}) == 1, key
+    assert len({seen[0][1] for seen in writers.values()}) == len(writers)
 
 
 def test_malformed_cdr_and_unknown_types_are_logged_and_skipped(space, launch, server):
