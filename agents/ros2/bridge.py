@@ -181,9 +181,8 @@ class Ros2Bridge(Agent):
             self._wished[device] = wish
             driver.want(wish)
         self.log.info(
-            "ROS 2 node %s/%s on domain %d (%s): %d topics in, %d lifecycle nodes, %d out",
-            m.namespace,
-            m.node,
+            "ROS 2 node %s on domain %d (%s): %d topics in, %d lifecycle nodes, %d out",
+            self.node.entity.full_node_name,
             m.domain,
             m.distro,
             len(self.topics),
