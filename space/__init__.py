@@ -12,6 +12,7 @@ from space.errors import (
     SpaceUnavailable,
     TemplateError,
 )
+from space.identity import Identity, load_identity
 from space.subscription import Change, Subscription
 from space.template import Template
 
@@ -19,6 +20,7 @@ __all__ = [
     "Change",
     "Changeset",
     "ChangesetRejected",
+    "Identity",
     "InputError",
     "MalformedPayload",
     "QueryError",
@@ -30,4 +32,5 @@ __all__ = [
     "TemplateError",
     "Transaction",
     "TripleSpace",
+    "load_identity",
 ]
