@@ -26,7 +26,7 @@ from rdflib.term import Node
 
 from agents.view import AC, RECORD_PREFIX, View
 from space import Change, SpaceError, SpaceTimeout, SpaceUnavailable, Subscription, TripleSpace
-from space.cli.options import add_connect
+from space.cli.options import add_connect, identity_of
 from space.heap import freeze_startup
 from space.presence import declare_agent
 
@@ -122,6 +122,7 @@ class Agent:
                         space=self.args.space,
                         agent=self.name,
                         config_file=self.args.config,
+                        identity=identity_of(self.args, self.name),
                     )
                     self._token = declare_agent(self.ts.session, self.ts.space, self.name)
                 self._subscription = self.subscribe()

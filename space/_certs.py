@@ -104,12 +104,12 @@ def init_authority(directory: Path) -> None:
     cert.write_bytes(ca.public_bytes(serialization.Encoding.PEM))
 
 
-def issue(directory: Path, name: str, hosts: Iterable[str] = DEFAULT_HOSTS) -> Identity:
+def issue(directory: Path, name: str, hosts: Iterable[str] = ()) -> Identity:
     """Sign a new key and certificate for `name` with the CA in `directory`; replace old ones.
 
     `hosts` (DNS names or IP addresses) go into the certificate's subject
-    alternative names: a router's certificate must name the address clients
-    dial, since they check it.
+    alternative names: a router's certificate must name every address it is
+    dialled at, since TLS clients check it; a client's needs none.
 
     Raises:
         InputError: `name` is not a legal identity, or there is no CA in `directory`.
@@ -123,7 +123,7 @@ def issue(directory: Path, name: str, hosts: Iterable[str] = DEFAULT_HOSTS) -> I
     assert isinstance(ca_key, ec.EllipticCurvePrivateKey)
     private = ec.generate_private_key(ec.SECP256R1())
     now = dt.datetime.now(dt.UTC)
-    cert = (
+    builder = (
         x509.CertificateBuilder()
         .subject_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, name)]))
         .issuer_name(ca_cert.subject)
@@ -132,7 +132,6 @@ def issue(directory: Path, name: str, hosts: Iterable[str] = DEFAULT_HOSTS) -> I
         .not_valid_before(now - dt.timedelta(minutes=5))
         .not_valid_after(now + dt.timedelta(days=_VALID_DAYS))
         .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
-        .add_extension(x509.SubjectAlternativeName([_san(h) for h in hosts]), critical=False)
         .add_extension(
             x509.ExtendedKeyUsage(
                 [ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH]
@@ -142,8 +141,11 @@ def issue(directory: Path, name: str, hosts: Iterable[str] = DEFAULT_HOSTS) -> I
         .add_extension(
             x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()), False
         )
-        .sign(ca_key, hashes.SHA256())
     )
+    names = [_san(h) for h in hosts]
+    if names:
+        builder = builder.add_extension(x509.SubjectAlternativeName(names), critical=False)
+    cert = builder.sign(ca_key, hashes.SHA256())
     identity = Identity(directory, name)
     _write_key(identity.key, private)
     identity.cert.write_bytes(cert.public_bytes(serialization.Encoding.PEM))
