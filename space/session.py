@@ -87,7 +87,7 @@ def listen_failed(exc: zenoh.ZError, listen: list[str] | None) -> ListenFailed:
 def check_can_listen(listen: list[str]) -> None:
     """Fail now if a router could not listen on these endpoints (a launcher's early check).
 
-    Only TCP and UDP endpoints are tried (bound and released at once); the
+    Only TCP, TLS and UDP endpoints are tried (bound and released at once); the
     router itself has the last word on the others.
 
     Raises:
@@ -97,7 +97,9 @@ def check_can_listen(listen: list[str]) -> None:
     make_config(mode="router", listen=listen)
     for endpoint in listen:
         protocol, _, address = endpoint.partition("/")
-        kind = {"tcp": socket.SOCK_STREAM, "udp": socket.SOCK_DGRAM}.get(protocol)
+        kind = {"tcp": socket.SOCK_STREAM, "tls": socket.SOCK_STREAM, "udp": socket.SOCK_DGRAM}.get(
+            protocol
+        )
         host, _, port = re.split(r"[?#]", address, maxsplit=1)[0].rpartition(":")
         if kind is None or not port.isdigit():
             continue

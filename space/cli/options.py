@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from space.zconfig import DEFAULT_ENDPOINT
+from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT
 
 if TYPE_CHECKING:
     from space.client import TripleSpace
@@ -18,7 +18,8 @@ def add_connect(parser: argparse.ArgumentParser) -> None:
         "--connect",
         metavar="ENDPOINT",
         action="append",
-        help=f"Zenoh endpoint of a router (repeatable; default {DEFAULT_ENDPOINT})",
+        help=f"Zenoh endpoint of a router (repeatable; default {DEFAULT_ENDPOINT}, "
+        f"{SECURE_ENDPOINT} with --secure)",
     )
     parser.add_argument("--config", metavar="FILE", help="a Zenoh JSON5 configuration file")
     add_secure(parser, "operator, or the agent's name")
