@@ -19,6 +19,7 @@ from types import FrameType
 from space.client import TripleSpace
 from space.errors import SpaceError
 from space.hmiport import choose_port
+from space.identity import load_identity
 from space.launch import AgentSpec, Launch
 from space.liveview import Frame, LiveView, robot_line
 from space.mirror import SpaceMirror
@@ -43,6 +44,8 @@ class Options:
     scenario: Scenario | None = None
     once: bool = False
     step_timeout: float = 90.0
+    secure: Path | None = None  # certificates: mutual TLS only, every process its identity
+    policy: Path | None = None
 
 
 def client_endpoint(listen: str) -> str:
@@ -81,6 +84,9 @@ class Deployment:
         self.scenario: ScenarioRun | None = None
         self.robot = launch.robots[0] if launch.robots else "robot1"
         self.hmi_port: int | None = None
+        self.operator = (
+            None if options.secure is None else load_identity(options.secure, "operator")
+        )
 
     def hmi_agent(self) -> AgentSpec | None:
         """Return the launch file's HMI agent, if it has one."""
@@ -90,6 +96,8 @@ class Deployment:
         """Return the command line of one agent process."""
         argv = [sys.executable, "-m", agent.module, "--connect", self.connect]
         argv += ["--space", self.launch.space]
+        if self.options.secure is not None:
+            argv += ["--secure", str(self.options.secure)]
         if agent.robot:
             argv += ["--robot", agent.robot]
         args = list(agent.args)
@@ -123,6 +131,10 @@ class Deployment:
             serve = (sys.executable, "-m", "space.cli", "serve", "--data", str(self.options.data))
             for endpoint in self.options.listen:
                 serve += ("--listen", endpoint)
+            if self.options.secure is not None:
+                serve += ("--secure", str(self.options.secure))
+            if self.options.policy is not None:
+                serve += ("--policy", str(self.options.policy))
             self.supervisor.start(ProcessSpec("serve", serve, tier=0))
             ts = self._wait_for_store()
             if ts is None:
@@ -162,7 +174,12 @@ class Deployment:
             self.supervisor.poll()
             try:
                 if ts is None:
-                    ts = TripleSpace.open(self.connect, space=self.launch.space, agent="tspace-up")
+                    ts = TripleSpace.open(
+                        self.connect,
+                        space=self.launch.space,
+                        agent="tspace-up",
+                        identity=self.operator,
+                    )
                 ts.snapshot((None, None, None), timeout=1.0)
                 return ts
             except SpaceError as exc:

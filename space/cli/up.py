@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from space.zconfig import DEFAULT_ENDPOINT
+from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT
 
 ORDER = 10
 DEFAULT_LAUNCH = Path("deploy/hospital.toml")
@@ -54,6 +54,19 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="SECONDS",
         help="how long each scenario step may take (default 90)",
     )
+    p.add_argument(
+        "--secure",
+        metavar="DIR",
+        type=Path,
+        help="mutual TLS on every link, each process with its own certificate from DIR "
+        "(tspace certs init); the router enforces --policy",
+    )
+    p.add_argument(
+        "--policy",
+        metavar="FILE",
+        type=Path,
+        help="with --secure: who may do what (default deploy/policy.toml)",
+    )
     p.set_defaults(func=run)
 
 
@@ -66,17 +79,21 @@ def run(args: argparse.Namespace) -> int:
     from space.paths import default_data_dir, shipped
     from space.scenario import SCENARIOS
 
+    if args.policy and not args.secure:
+        raise InputError("--policy needs --secure DIR")
     if args.once and not args.scenario:
         raise InputError("--once needs --scenario")
     if args.scenario and args.scenario not in SCENARIOS:
         raise InputError(f"unknown scenario {args.scenario!r}; known: {', '.join(SCENARIOS)}")
     options = Options(
         launch=read_launch(args.launch or shipped(DEFAULT_LAUNCH)),
-        listen=args.listen or [DEFAULT_ENDPOINT],
+        listen=args.listen or [SECURE_ENDPOINT if args.secure else DEFAULT_ENDPOINT],
         data=args.data or default_data_dir(),
         hmi_port=args.hmi_port,
         scenario=SCENARIOS[args.scenario] if args.scenario else None,
         once=args.once,
         step_timeout=args.step_timeout,
+        secure=args.secure,
+        policy=args.policy,
     )
     return Deployment(options, LiveView.for_terminal()).run()
