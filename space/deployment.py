@@ -97,7 +97,10 @@ class Deployment:
         argv = [sys.executable, "-m", agent.module, "--connect", self.connect]
         argv += ["--space", self.launch.space]
         if self.options.secure is not None:
-            argv += ["--secure", str(self.options.secure)]
+            # The identity `tspace certs init --fleet` made for it: KIND.ROBOT or KIND.
+            kind = agent.name.split("/")[0]
+            identity = f"{kind}.{agent.robot}" if agent.robot else kind
+            argv += ["--secure", str(self.options.secure), "--identity", identity]
         if agent.robot:
             argv += ["--robot", agent.robot]
         args = list(agent.args)
