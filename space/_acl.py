@@ -8,7 +8,10 @@ liveliness token, and send writes and requests on the keys that carry its own
 name, `<root>/<space>/@/write/<CN>` and `<root>/<space>/@/query/<CN>`. So a
 store knows who wrote what (the router let only that CN use that key), and
 nobody but a server can publish a change notification, declare a queryable or
-answer a query. Revoked identities are denied everything. The access control
+answer a query. A robot host's own router (`router.ROBOT`) may pass on what
+that robot's agents and reasoner may send, so a robot host taken over still
+cannot speak for another robot. Revoked identities are denied everything.
+The access control
 applies on the router that holds it, to the links of its clients: clients
 must connect to such a router, never peer with each other.
 """
@@ -113,6 +116,7 @@ def access_control(policy: Policy, root: str = keys.ROOT) -> dict:
     grant("trusted", policy.named(Role.SERVER, Role.OPERATOR), ["all"])
     members = policy.named(Role.REASONER, Role.ROBOT_AGENT, Role.WRITER)
     reads = [r["id"] for r in _reads(root)]
+    crews: dict[str, list[str]] = {}
     for index, name in enumerate(members):
         own = f"own-{index}"
         rules.append(
@@ -127,7 +131,13 @@ def access_control(policy: Policy, root: str = keys.ROOT) -> dict:
         )
         rules.append(_rule(f"token-{index}", ["liveliness_token"], [f"{root}/*/@agents/{name}"]))
         extra = ["reasoner-roster"] if policy.roles[name] is Role.REASONER else []
-        grant(f"member-{index}", [name], [*reads, own, f"token-{index}", *extra])
+        crews[name] = [own, f"token-{index}", *extra]
+        grant(f"member-{index}", [name], [*reads, *crews[name]])
+    # A robot host's router passes on what its robot's own processes may send, nothing else.
+    for index, name in enumerate(policy.named(Role.ROBOT_ROUTER)):
+        robot = name.removeprefix("router.")
+        own = sorted({rule for member in policy.crew_of(robot) for rule in crews[member]})
+        grant(f"robot-router-{index}", [name], [*reads, *own])
     if policy.revoked:
         rules.append(
             {

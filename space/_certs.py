@@ -35,7 +35,8 @@ def fleet_identities(launch_file: str | Path) -> list[str]:
     """Return the identities a launch file's processes run as.
 
     A per-robot agent runs as `KIND.ROBOT` (the agent's own name), a fleet
-    agent as `KIND`; the store, the router and the operator are added.
+    agent as `KIND`; the store, the router, each robot host's router
+    (`router.ROBOT`) and the operator are added.
 
     Raises:
         InputError: the file cannot be read or is not a launch file.
@@ -48,7 +49,7 @@ def fleet_identities(launch_file: str | Path) -> list[str]:
     agents = data.get("agent", [])
     if not isinstance(robots, list) or not isinstance(agents, list):
         raise InputError(f"{launch_file}: robots and [[agent]] must be lists")
-    names = [*SERVERS, OPERATOR]
+    names = [*SERVERS, OPERATOR, *(f"router.{robot}" for robot in robots)]
     for entry in agents:
         if not isinstance(entry, dict) or not isinstance(entry.get("name"), str):
             raise InputError(f"{launch_file}: every [[agent]] needs a name")

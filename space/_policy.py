@@ -30,6 +30,7 @@ _TOP = {
     "operators",
     "reasoners",
     "robot_agents",
+    "robot_routers",
     "writers",
 }
 
@@ -41,6 +42,7 @@ class Role(Enum):
     OPERATOR = "operator"  # may do anything
     REASONER = "reasoner"  # writes asserted and inferred triples about anything
     ROBOT_AGENT = "robot agent"  # writes its robot's things
+    ROBOT_ROUTER = "robot router"  # passes on what its robot's agents and reasoner may send
     WRITER = "writer"  # writes some predicates, about anything
 
 
@@ -60,6 +62,11 @@ class Policy:
         if identity is None or identity in self.revoked:
             return None
         return self.roles.get(identity)
+
+    def crew_of(self, robot: str) -> list[str]:
+        """Return the robot agents and reasoner named `KIND.robot`, revoked ones left out."""
+        mine = (Role.ROBOT_AGENT, Role.REASONER)
+        return [n for n in self.named(*mine) if n.endswith(f".{robot}")]
 
     def named(self, *roles: Role) -> list[str]:
         """Return the identities with one of `roles`, revoked ones left out, sorted."""
@@ -112,6 +119,10 @@ def _build(data: dict) -> Policy:
         for robot in robots:
             robot_of[f"{kind}.{robot}"] = URIRef(f"{namespace}{robot}")
     give(robot_of, Role.ROBOT_AGENT, "robot_agents")
+    if _table(data, "robot_routers").get("per_robot", False):
+        routers = {f"router.{r}": URIRef(f"{namespace}{r}") for r in robots}
+        give(routers, Role.ROBOT_ROUTER, "robot_routers")
+        robot_of.update(routers)
     predicates: dict[str, frozenset[URIRef]] = {}
     for name, entry in _table(data, "writers").items():
         if not isinstance(entry, dict):

@@ -124,7 +124,8 @@ def test_certs_init_makes_a_ca_and_one_certificate_per_identity_keys_0600(tmp_pa
     cmd = tspace_cmd("certs", "init", str(directory), "--fleet", str(REPO / "deploy/fleet.toml"))
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
-    expected = {"router", "store", "operator", "reasoner", "fleet_monitor", "hmi"} | {
+    expected = {"router", "store", "operator", "reasoner", "fleet_monitor", "hmi"}
+    expected |= {"router.robot1", "router.robot2", "router.guide1"} | {
         f"{kind}.{robot}"
         for kind in ("hw_monitor", "nav_monitor", "behavior")
         for robot in ("robot1", "robot2", "guide1")

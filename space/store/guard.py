@@ -60,7 +60,7 @@ class WriteGuard:
                 if p not in allowed:
                     return f"refused {writer}: may not write {_name(p, show)} (of {_name(s, show)})"
             return None
-        robot = self.policy.robot_of[writer]
+        robot = self.policy.robot_of[writer]  # a robot agent's, or a robot router's own
         for s, p, _o in changed:
             if not self._owns(robot, s, state, cs):
                 return (
