@@ -60,14 +60,14 @@ def make_config(
         connect = [default]
     if listen is None and mode == "router" and not config_file:
         listen = [default]
-    if identity is not None:
-        _secure(conf, identity, [*(connect or []), *(listen or [])])
     if access_control is not None:
         _insert(conf, "access_control", access_control)
     if connect is not None:
         _insert_endpoints(conf, "connect/endpoints", connect)
     if listen is not None:
         _insert_endpoints(conf, "listen/endpoints", listen)
+    if identity is not None:
+        _secure(conf, identity, mode)
     if not config_file:
         # Explicit endpoints only: multicast scouting would make separate test
         # routers on one machine find each other and merge their spaces.
@@ -75,8 +75,14 @@ def make_config(
     return conf
 
 
-def _secure(conf: zenoh.Config, identity: Identity, endpoints: list[str]) -> None:
-    """Make every link mutual TLS with `identity`'s certificate; refuse any other link."""
+def _secure(conf: zenoh.Config, identity: Identity, mode: str) -> None:
+    """Make every link mutual TLS with `identity`'s certificate; refuse any other link.
+
+    Every endpoint, given as an option or in a configuration file, must be TLS.
+    """
+    endpoints = _endpoints(conf, "connect/endpoints", mode)
+    if mode != "client":
+        endpoints += _endpoints(conf, "listen/endpoints", mode)
     plain = [e for e in endpoints if not e.startswith("tls/")]
     if plain:
         raise ConfigError(f"secure mode speaks TLS only: use tls/HOST:PORT, not {plain[0]!r}")
@@ -91,6 +97,14 @@ def _secure(conf: zenoh.Config, identity: Identity, endpoints: list[str]) -> Non
     tls["enable_mtls"] = True  # type: ignore[assignment]
     _insert(conf, "transport/link/tls", tls)
     _insert(conf, "transport/link/protocols", ["tls"])
+
+
+def _endpoints(conf: zenoh.Config, key: str, mode: str) -> list[str]:
+    """Return the endpoints set at `key` (a list, or one list per mode)."""
+    value = json.loads(conf.get_json(key))
+    if isinstance(value, dict):
+        value = value.get(mode, [])
+    return [str(e) for e in value]
 
 
 def zenoh_reason(exc: zenoh.ZError) -> str:

@@ -360,3 +360,21 @@ def test_the_battery_scenario_passes_in_secure_mode(tmp_path):
     assert done.returncode == 0, done.stderr[-3000:] + logs[-3000:]
     assert "scenario battery: completed" in done.stdout + done.stderr
     assert "refused" not in logs, logs
+
+
+def test_secure_serve_refuses_a_configuration_with_a_plain_endpoint(tmp_path, certs):
+    config = REPO / "deploy" / "multihost" / "router.json5"  # listens on tcp/0.0.0.0:7447
+    cmd = tspace_cmd(
+        "serve", "--secure", str(certs), "--config", str(config), "--data", str(tmp_path / "data")
+    )
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=30)
+    assert done.returncode == 1
+    assert "TLS only: use tls/HOST:PORT, not 'tcp/0.0.0.0:7447'" in done.stderr
+    assert not (tmp_path / "data").exists()
+    missing = subprocess.run(
+        tspace_cmd("query", "-t", "?s ?p ?o", "--secure", str(certs), "--identity", "robot9"),
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert missing.returncode == 1 and "no identity 'robot9'" in missing.stderr
