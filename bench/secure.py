@@ -29,7 +29,7 @@ def make_certs(directory: Path) -> Path:
     """Make a CA and the certificates of the bench's processes in `directory`."""
     _certs.init_authority(directory)
     for name in [*_certs.SERVERS, _certs.OPERATOR, *ROBOT_AGENTS]:
-        _certs.issue(directory, name, _certs.DEFAULT_HOSTS if name in _certs.SERVERS else ())
+        _certs.issue(directory, name, _certs.hosts_for(name))
     return directory
 
 

@@ -31,6 +31,17 @@ DEFAULT_HOSTS = ("localhost", "127.0.0.1")
 _VALID_DAYS = 825
 
 
+def hosts_for(name: str, extra: Iterable[str] = ()) -> list[str]:
+    """Return the addresses a certificate for `name` must name (a router is dialled at them).
+
+    Servers: loopback and `extra` (the addresses other hosts dial); a robot host's
+    router (`router.ROBOT`): loopback, where its own agents dial it; others: none.
+    """
+    if name in SERVERS:
+        return [*DEFAULT_HOSTS, *extra]
+    return list(DEFAULT_HOSTS) if name.startswith("router.") else []
+
+
 def fleet_identities(launch_file: str | Path) -> list[str]:
     """Return the identities a launch file's processes run as.
 

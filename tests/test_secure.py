@@ -54,7 +54,7 @@ DEVICES = [
 def make_certs(directory: Path, names: list[str] = NAMES) -> Path:
     _certs.init_authority(directory)
     for name in names:
-        _certs.issue(directory, name, _certs.DEFAULT_HOSTS if name in _certs.SERVERS else ())
+        _certs.issue(directory, name, _certs.hosts_for(name))
     return directory
 
 

@@ -69,9 +69,9 @@ def test_a_robot_host_speaks_only_for_its_own_robot(tmp_path):
         server, robot2 = net["server"], net["robot2"]
         certs = tmp_path / "certs"
         _certs.init_authority(certs)
-        _certs.issue(certs, "store", [*_certs.DEFAULT_HOSTS, server.address])
+        _certs.issue(certs, "store", _certs.hosts_for("store", [server.address]))
         for name in ("router.robot2", "operator", "hw_monitor.robot2"):
-            _certs.issue(certs, name, _certs.DEFAULT_HOSTS)
+            _certs.issue(certs, name, _certs.hosts_for(name))
         uplink = f"tls/{server.address}:{PORT}"
         local = f"tls/127.0.0.1:{PORT}"
         serve = [sys.executable, "-m", "space.cli", "serve", "--secure", str(certs)]

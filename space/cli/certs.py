@@ -58,12 +58,6 @@ def _add_hosts(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _hosts(name: str, extra: list[str]) -> list[str]:
-    from space._certs import DEFAULT_HOSTS, SERVERS
-
-    return [*DEFAULT_HOSTS, *extra] if name in SERVERS else []
-
-
 def run_init(args: argparse.Namespace) -> int:
     """Make the CA and the missing certificates; print what was made."""
     from space import _certs
@@ -75,7 +69,7 @@ def run_init(args: argparse.Namespace) -> int:
     for name in dict.fromkeys(names):
         if Identity(args.directory, name).cert.exists():
             continue
-        _certs.issue(args.directory, name, _hosts(name, args.host))
+        _certs.issue(args.directory, name, _certs.hosts_for(name, args.host))
         made.append(name)
     kept = len(set(names)) - len(made)
     print(f"{args.directory}: made {len(made)} certificate(s), kept {kept}: {' '.join(made)}")
@@ -91,6 +85,6 @@ def run_issue(args: argparse.Namespace) -> int:
     for name in args.names:
         check_name(name)
     for name in args.names:
-        identity = _certs.issue(args.directory, name, _hosts(name, args.host))
+        identity = _certs.issue(args.directory, name, _certs.hosts_for(name, args.host))
         print(f"{identity.cert} {identity.key}")
     return 0
