@@ -97,10 +97,12 @@ class Deployment:
         argv = [sys.executable, "-m", agent.module, "--connect", self.connect]
         argv += ["--space", self.launch.space]
         if self.options.secure is not None:
-            # The identity `tspace certs init --fleet` made for it: KIND.ROBOT or KIND.
+            # The identity `tspace certs init --fleet` made for it, KIND.ROBOT or KIND, is
+            # its name too: the routers let it declare a liveliness token under that name only.
             kind = agent.name.split("/")[0]
             identity = f"{kind}.{agent.robot}" if agent.robot else kind
             argv += ["--secure", str(self.options.secure), "--identity", identity]
+            argv += ["--name", identity]
         if agent.robot:
             argv += ["--robot", agent.robot]
         args = list(agent.args)

@@ -19,6 +19,7 @@ from uprun import Up
 
 from conftest import AC_NS, REPO, tspace_cmd, wait_for
 from space import TripleSpace, load_identity
+from space.presence import alive_agents
 
 AC = Namespace(AC_NS)
 
@@ -79,6 +80,15 @@ def test_the_fleet_works_in_secure_mode_and_the_hmi_cannot_set_a_battery(tmp_pat
         identity = load_identity(certs, "operator")
         endpoint = f"tls/127.0.0.1:{up.port}"
         with TripleSpace.open(endpoint, space="fleet", identity=identity) as ts:
+            # Every agent's liveliness token got through under its identity; so robots are present.
+            agents = {"reasoner", "fleet_monitor", "hmi"} | {
+                f"{kind}.{robot}"
+                for kind in ("hw_monitor", "nav_monitor", "behavior")
+                for robot in names
+            }
+            wait_for(lambda: set(alive_agents(ts.session, "fleet")) == agents, 30, "every agent")
+            present = ts.query((None, AC.presence, Literal("present")))
+            assert {s for s, _p, _o in present} == {AC[r] for r in names}
             battery = AC.robot2_battery
             ts.write(
                 [
