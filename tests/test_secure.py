@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import stat
 import subprocess
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -378,3 +379,61 @@ def test_secure_serve_refuses_a_configuration_with_a_plain_endpoint(tmp_path, ce
         timeout=30,
     )
     assert missing.returncode == 1 and "no identity 'robot9'" in missing.stderr
+
+
+def test_the_commands_work_with_secure_and_identity(secure, space_name):
+    def tspace(*args: str, identity: str = "operator", stdin: str | None = None):
+        cmd = tspace_cmd(
+            *args,
+            "--connect",
+            secure.endpoint,
+            "--space",
+            space_name,
+            "--secure",
+            str(secure.certs),
+            "--identity",
+            identity,
+        )
+        return subprocess.run(cmd, input=stdin, capture_output=True, text=True, timeout=60)
+
+    prefix = f"@prefix ac: <{AC_NS}> .\n"
+    devices = prefix + "ac:robot2 ac:has_device ac:robot2_battery .\n"
+    assert tspace("write", "-", stdin=devices).returncode == 0
+    watch = subprocess.Popen(
+        tspace_cmd(
+            "watch",
+            "?s ac:battery_level ?o",
+            "--connect",
+            secure.endpoint,
+            "--space",
+            space_name,
+            "--secure",
+            str(secure.certs),
+        ),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    lines: list[str] = []
+    threading.Thread(target=lambda: lines.extend(watch.stdout), daemon=True).start()
+    try:
+        count = iter(range(1000))
+
+        def watched() -> bool:  # a new reading each time, until the operator's watch shows one
+            level = f'ac:robot2_battery ac:battery_level "{next(count)}" .\n'
+            done = tspace("write", "-", identity="hw_monitor.robot2", stdin=prefix + level)
+            assert done.returncode == 0, done.stderr
+            return any(line.startswith("+ ac:robot2_battery ac:battery_level") for line in lines)
+
+        wait_for(watched, 30, "tspace watch --secure to show a write")
+        query = tspace("query", "-t", "?s ac:battery_level ?o", identity="hw_monitor.robot1")
+        assert query.returncode == 0 and '"0"' in query.stdout  # robot1's agent reads the fleet
+        denied = tspace("take", "ac:robot2_battery ?p ?o", identity="hw_monitor.robot1")
+        assert denied.returncode == 1 and "refused hw_monitor.robot1" in denied.stderr
+        taken = tspace(
+            "take", "ac:robot2_battery ac:battery_level ?o", identity="hw_monitor.robot2"
+        )
+        assert taken.returncode == 0 and '"0"' in taken.stdout, taken.stderr
+    finally:
+        watch.terminate()
+        watch.wait(timeout=10)
