@@ -25,10 +25,18 @@ from rdflib import URIRef
 from rdflib.term import Node
 
 from agents.view import AC, RECORD_PREFIX, View
-from space import Change, SpaceError, SpaceTimeout, SpaceUnavailable, Subscription, TripleSpace
-from space.cli.options import add_connect, identity_of
-from space.heap import freeze_startup
-from space.presence import declare_agent
+from space import (
+    Change,
+    SpaceError,
+    SpaceTimeout,
+    SpaceUnavailable,
+    Subscription,
+    TripleSpace,
+    add_connect,
+    declare_agent,
+    freeze_startup,
+    identity_of,
+)
 
 Values = Mapping[tuple[Node, Node], Node | None]
 

@@ -26,8 +26,7 @@ from agents.behavior import Behavior
 from agents.hw_monitor import HwMonitor
 from agents.nav_monitor import NavMonitor
 from agents.view import AC
-from space import Change, TripleSpace
-from space.presence import declare_agent
+from space import Change, TripleSpace, declare_agent
 
 KINDS: dict[str, type[Agent]] = {
     "hw_monitor": HwMonitor,

@@ -21,7 +21,7 @@ from rdflib import RDF, Literal, URIRef
 
 from agents.base import Agent, Values, local_name, run_agent
 from agents.view import AC
-from space.presence import alive_agents, watch_agents
+from space import alive_agents, watch_agents
 
 PRESENT = Literal("present")
 GONE = Literal("gone")

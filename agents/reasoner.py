@@ -32,11 +32,8 @@ from agents.base import Agent, local_name, run_agent
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
 from agents.ownership import PREFIX, Roster, concerned_robot
 from agents.view import AC
-from space import Change, SpaceError, Subscription
-from space.heap import refreeze
+from space import Change, Pending, SpaceError, Subscription, Triple, refreeze, triple_to_nt
 from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
-from space.request import Pending
-from space.terms import Triple, triple_to_nt
 
 REPO = Path(__file__).resolve().parents[1]
 ONTOLOGY_IRI = URIRef("https://w3id.org/tspace/selfconfig")

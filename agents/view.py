@@ -15,9 +15,8 @@ from collections.abc import Iterable
 from rdflib import OWL, RDF, Graph, Literal, Namespace, URIRef
 from rdflib.term import Node
 
-from space.changeset import Changeset
+from space import Changeset, Triple
 from space.memory import BulkMemory
-from space.terms import Triple
 
 AC = Namespace("https://w3id.org/tspace/selfconfig#")
 RECORD_PREFIX = str(AC) + "firing_"

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import zenoh
 
+from space.errors import InputError
 from space.heap import freeze_startup
 from space.identity import Identity
 from space.session import open_router
@@ -18,6 +19,7 @@ from space.store.guard import WriteGuard
 from space.store.server import StoreServer
 
 log = logging.getLogger("tspace.serve")
+DEFAULT_POLICY = Path("deploy/policy.toml")  # in the current directory
 
 
 @contextmanager
@@ -36,11 +38,11 @@ def open_server(
     """Open a router-mode Zenoh session with the store on it (unless `store=False`); close both.
 
     With `identity`, the router speaks mutual TLS only and enforces the policy
-    (`policy_file`, default the shipped deploy/policy.toml) on its clients, and
+    (`policy_file`, default `DEFAULT_POLICY`) on its clients, and
     the store checks every write against it.
 
     Raises:
-        InputError: the policy file cannot be read or is malformed.
+        InputError: the policy file is missing, cannot be read or is malformed.
         ConfigError: an endpoint or the configuration file is malformed.
         ListenFailed: the router cannot listen (the port is taken, say).
     """
@@ -80,9 +82,10 @@ def _secure_parts(
         return None, None
     from space._acl import access_control
     from space._policy import read_policy
-    from space.paths import shipped
 
-    policy = read_policy(policy_file or shipped(Path("deploy/policy.toml")))
+    if policy_file is None and not DEFAULT_POLICY.exists():
+        raise InputError(f"secure mode needs a policy: --policy FILE (no {DEFAULT_POLICY} here)")
+    policy = read_policy(policy_file or DEFAULT_POLICY)
     log.info("secure: mTLS as %s; %d identities in the policy", identity.name, len(policy.roles))
     return WriteGuard(policy), access_control(policy)
 

@@ -32,7 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--policy",
         metavar="FILE",
-        help="with --secure: who may do what (default deploy/policy.toml)",
+        help="with --secure: who may do what (default deploy/policy.toml, here)",
     )
     p.add_argument(
         "--data", metavar="DIR", type=Path, help="where the store persists (default: user data dir)"

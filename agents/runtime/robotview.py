@@ -14,9 +14,7 @@ from dataclasses import dataclass
 from rdflib import RDF, BNode, Graph, Literal, Namespace, URIRef
 from rdflib.term import Node
 
-from space.mirror import ChangeRecord
-from space.prefixes import PrefixMap
-from space.terms import Triple
+from space import ChangeRecord, PrefixMap, Triple
 
 AC = Namespace("https://w3id.org/tspace/selfconfig#")
 PREFIXES = PrefixMap({"ac": str(AC)})

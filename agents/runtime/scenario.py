@@ -16,11 +16,10 @@ from typing import TYPE_CHECKING
 
 from rdflib import Literal
 
-from space.robotview import AC, RobotState, battery_of, read_robots, task_named
+from agents.runtime.robotview import AC, RobotState, battery_of, read_robots, task_named
 
 if TYPE_CHECKING:
-    from space import TripleSpace
-    from space.mirror import SpaceMirror
+    from space import SpaceMirror, TripleSpace
 
 STEP_TIMEOUT = 90.0
 INTERACTION = ("TouchScreen", "Speaker", "Microphone")

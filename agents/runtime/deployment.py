@@ -16,18 +16,20 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
 
-from space.client import TripleSpace
-from space.errors import SpaceError
-from space.hmiport import choose_port
-from space.identity import load_identity
-from space.launch import AgentSpec, Launch
-from space.liveview import Frame, LiveView, robot_line
-from space.mirror import SpaceMirror
-from space.robotview import BadValues, read_firings, read_robots
-from space.scenario import Scenario, ScenarioRun
-from space.session import check_can_listen
-from space.supervisor import ProcessSpec, Supervisor
-from space.turtle import read_turtle
+from agents.runtime.hmiport import choose_port
+from agents.runtime.launch import AgentSpec, Launch
+from agents.runtime.liveview import Frame, LiveView, robot_line
+from agents.runtime.robotview import BadValues, read_firings, read_robots
+from agents.runtime.scenario import Scenario, ScenarioRun
+from agents.runtime.supervisor import ProcessSpec, Supervisor
+from space import (
+    SpaceError,
+    SpaceMirror,
+    TripleSpace,
+    check_can_listen,
+    load_identity,
+    read_turtle,
+)
 
 STORE_STARTUP = 30.0
 TICK = 0.1
@@ -35,7 +37,7 @@ TICK = 0.1
 
 @dataclass(frozen=True)
 class Options:
-    """What `tspace up` was asked to run (see `space.cli.up`)."""
+    """What `tspace up` was asked to run (see `agents.runtime.up`)."""
 
     launch: Launch
     listen: list[str]

@@ -5,10 +5,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT
+from space import DEFAULT_ENDPOINT, SECURE_ENDPOINT
 
 ORDER = 10
 DEFAULT_LAUNCH = Path("deploy/hospital.toml")
+POLICY = Path("deploy/policy.toml")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -65,19 +66,19 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--policy",
         metavar="FILE",
         type=Path,
-        help="with --secure: who may do what (default deploy/policy.toml)",
+        help=f"with --secure: who may do what (default {POLICY}, here or in the project's folder)",
     )
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the deployment until Ctrl-C, SIGTERM, or the end of a `--once` scenario."""
-    from space.deployment import Deployment, Options
-    from space.errors import InputError
-    from space.launch import read_launch
-    from space.liveview import LiveView
-    from space.paths import default_data_dir, shipped
-    from space.scenario import SCENARIOS
+    from agents.resources import shipped
+    from agents.runtime.deployment import Deployment, Options
+    from agents.runtime.launch import read_launch
+    from agents.runtime.liveview import LiveView
+    from agents.runtime.scenario import SCENARIOS
+    from space import InputError, default_data_dir
 
     if args.policy and not args.secure:
         raise InputError("--policy needs --secure DIR")
@@ -94,6 +95,6 @@ def run(args: argparse.Namespace) -> int:
         once=args.once,
         step_timeout=args.step_timeout,
         secure=args.secure,
-        policy=args.policy,
+        policy=args.policy or (shipped(POLICY) if args.secure else None),
     )
     return Deployment(options, LiveView.for_terminal()).run()
