@@ -372,6 +372,12 @@ def test_secure_serve_refuses_a_configuration_with_a_plain_endpoint(tmp_path, ce
     assert done.returncode == 1
     assert "TLS only: use tls/HOST:PORT, not 'tcp/0.0.0.0:7447'" in done.stderr
     assert not (tmp_path / "data").exists()
+    elsewhere = tmp_path / "elsewhere"  # no deploy/policy.toml here, and none named
+    elsewhere.mkdir()
+    cmd = tspace_cmd("serve", "--secure", str(certs), "--data", str(tmp_path / "data"))
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=30, cwd=elsewhere)
+    assert done.returncode == 1 and "secure mode needs a policy: --policy FILE" in done.stderr
+    assert not (tmp_path / "data").exists()
     missing = subprocess.run(
         tspace_cmd("query", "-t", "?s ?p ?o", "--secure", str(certs), "--identity", "robot9"),
         capture_output=True,
