@@ -35,6 +35,7 @@ from space import (
     add_connect,
     declare_agent,
     freeze_startup,
+    identity_of,
 )
 
 Values = Mapping[tuple[Node, Node], Node | None]
@@ -118,6 +119,7 @@ class Agent:
                         space=self.args.space,
                         agent=self.name,
                         config_file=self.args.config,
+                        identity=identity_of(self.args, self.name),
                     )
                     self._token = declare_agent(self.ts.session, self.ts.space, self.name)
                 self._subscription = self.subscribe()
