@@ -18,7 +18,7 @@ from datetime import UTC, datetime
 from rdflib import RDF, Graph, Literal, URIRef
 from rdflib.term import Node
 
-from agents.view import AC, RECORD_PREFIX
+from agents.vocabulary import AC, RECORD_PREFIX
 from space import Triple
 
 FIRING_PREFIX = RECORD_PREFIX  # the subjects of firing records

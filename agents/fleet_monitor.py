@@ -19,8 +19,8 @@ import sys
 import zenoh
 from rdflib import RDF, Literal, URIRef
 
-from agents.base import Agent, Values, local_name, run_agent
-from agents.view import AC
+from agents.base import Agent, Values, run_agent
+from agents.vocabulary import AC, local_name
 from space import alive_agents, watch_agents
 
 PRESENT = Literal("present")

@@ -26,13 +26,13 @@ from dataclasses import asdict
 from rdflib import OWL, RDF, RDFS, Literal, URIRef
 from rdflib.term import Node
 
-from agents.base import Agent, local_name, run_agent
+from agents.base import Agent, run_agent
 from agents.hmi_history import LOOKBACK, History
 from agents.hmi_web.guard import Guard
 from agents.hmi_web.server import CommandError, Commands, HmiServer, StateBoard
 from agents.runtime.robotview import BadValues, read_firings, read_robots
 from agents.sim.battery import middle_of
-from agents.view import AC
+from agents.vocabulary import AC, local_name
 from space import (
     Change,
     ChangeRecord,

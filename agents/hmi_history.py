@@ -19,7 +19,7 @@ from rdflib import Graph, Literal
 from rdflib.term import Node
 
 from agents.sentences import firing_sentence
-from agents.view import AC
+from agents.vocabulary import AC
 from space import Changeset, Triple, triple_to_nt
 
 LOOKBACK = 3000  # changesets read from the store's log at start

@@ -31,8 +31,7 @@ import zenoh
 from rdflib import RDF
 from rdflib.term import Node
 
-from agents.base import local_name
-from agents.view import AC
+from agents.vocabulary import AC, local_name
 from space import KEY_ROOT, Triple, escape_key_chunk, unescape_key_chunk
 from space.reasoning import RuleEngine
 

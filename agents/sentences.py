@@ -15,7 +15,7 @@ from collections.abc import Iterable, Sequence
 from rdflib import RDF, BNode, Graph, Literal, URIRef
 from rdflib.term import Node
 
-from agents.view import AC, RECORD_PREFIX
+from agents.vocabulary import AC, RECORD_PREFIX
 from space import Triple
 
 TASKS = {

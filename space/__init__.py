@@ -5,7 +5,7 @@ This list is the library's API: an application (the robot's agents under
 """
 
 from space.changeset import Changeset
-from space.cli.options import add_connect
+from space.cli.options import add_connect, identity_of
 from space.client import Transaction, TripleSpace
 from space.display import triple_text
 from space.errors import (
@@ -20,7 +20,9 @@ from space.errors import (
     TemplateError,
 )
 from space.explanation import Explanation, Written
+from space.functional import Replacement, declares_functional, replace_functional
 from space.heap import freeze_startup, refreeze
+from space.identity import Identity, load_identity
 from space.keys import ROOT as KEY_ROOT
 from space.keys import escape as escape_key_chunk
 from space.keys import unescape as unescape_key_chunk
@@ -37,22 +39,25 @@ from space.template import Template
 from space.terms import Triple, from_nt, triple_to_nt
 from space.turtle import read_turtle
 from space.why import WhyService
-from space.zconfig import DEFAULT_ENDPOINT, make_config
+from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT, make_config
 
 __all__ = [
     "DEFAULT_ENDPOINT",
     "KEY_ROOT",
+    "SECURE_ENDPOINT",
     "Change",
     "ChangeRecord",
     "Changeset",
     "ChangesetRejected",
     "Explanation",
+    "Identity",
     "InputError",
     "MalformedPayload",
     "NoReasoner",
     "Pending",
     "PrefixMap",
     "QueryError",
+    "Replacement",
     "SpaceError",
     "SpaceMirror",
     "SpaceTimeout",
@@ -70,14 +75,18 @@ __all__ = [
     "any_free_port",
     "check_can_listen",
     "declare_agent",
+    "declares_functional",
     "default_data_dir",
     "escape_key_chunk",
     "freeze_startup",
     "from_nt",
+    "identity_of",
+    "load_identity",
     "make_config",
     "probe_port",
     "read_turtle",
     "refreeze",
+    "replace_functional",
     "triple_text",
     "triple_to_nt",
     "unescape_key_chunk",

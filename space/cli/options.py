@@ -1,16 +1,17 @@
-"""Options shared by the sub-commands (`--connect`, `--space`, `--timeout`)."""
+"""Options shared by the sub-commands (`--connect`, `--space`, `--timeout`, `--secure`)."""
 
 from __future__ import annotations
 
 import argparse
 from typing import TYPE_CHECKING
 
-from space.zconfig import DEFAULT_ENDPOINT
+from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT
 
 if TYPE_CHECKING:
     import zenoh
 
     from space.client import TripleSpace
+    from space.identity import Identity
 
 
 def add_connect(parser: argparse.ArgumentParser, *, space: str | None = "default") -> None:
@@ -22,9 +23,11 @@ def add_connect(parser: argparse.ArgumentParser, *, space: str | None = "default
         "--connect",
         metavar="ENDPOINT",
         action="append",
-        help=f"Zenoh endpoint of a router (repeatable; default {DEFAULT_ENDPOINT})",
+        help=f"Zenoh endpoint of a router (repeatable; default {DEFAULT_ENDPOINT}, "
+        f"{SECURE_ENDPOINT} with --secure)",
     )
     parser.add_argument("--config", metavar="FILE", help="a Zenoh JSON5 configuration file")
+    add_secure(parser, "operator, or the agent's name")
     parser.add_argument(
         "--space",
         default=space,
@@ -42,6 +45,37 @@ def add_connect(parser: argparse.ArgumentParser, *, space: str | None = "default
     )
 
 
+def add_secure(parser: argparse.ArgumentParser, default: str) -> None:
+    """Add `--secure DIR` and `--identity NAME` (whose certificate; `default` says the default)."""
+    parser.add_argument(
+        "--secure",
+        metavar="DIR",
+        help="speak mutual TLS only, with the certificates of DIR (tspace certs init)",
+    )
+    parser.add_argument(
+        "--identity",
+        metavar="NAME",
+        help=f"with --secure: whose certificate to use (default {default})",
+    )
+
+
+def identity_of(args: argparse.Namespace, default: str) -> Identity | None:
+    """Return the identity `--secure`/`--identity` name, or None without `--secure`.
+
+    Raises:
+        UsageError: `--identity` without `--secure`.
+        ConfigError: the directory lacks the CA's or the identity's certificate or key.
+    """
+    from space.errors import UsageError
+    from space.identity import load_identity
+
+    if args.secure is None:
+        if args.identity is not None:
+            raise UsageError("--identity needs --secure DIR")
+        return None
+    return load_identity(args.secure, args.identity or default)
+
+
 def open_space(args: argparse.Namespace, agent: str, *, create: bool = False) -> TripleSpace:
     """Open the space named by `--space` through the routers of `--connect`.
 
@@ -50,10 +84,14 @@ def open_space(args: argparse.Namespace, agent: str, *, create: bool = False) ->
     does not hold is an error naming those it does, unless `create` (a write
     makes a new space).
 
+    With `--secure`, as `--identity` (default: the operator); a secure store answers
+    only its own keys, so there `--space` is taken as given ('default' if none).
+
     Raises:
         InputError: `--space` is not a legal space name, or not one the store holds.
         UsageError: no `--space`, and the store holds several.
-        ConfigError: a `--connect` endpoint or the `--config` file is malformed.
+        ConfigError: a `--connect` endpoint or the `--config` file is malformed, or
+            the `--secure` directory lacks the identity's certificate.
         SpaceUnavailable, SpaceTimeout: no router, or no store answered.
     """
     from space.client import TripleSpace
@@ -62,6 +100,15 @@ def open_space(args: argparse.Namespace, agent: str, *, create: bool = False) ->
 
     if args.space is not None:
         check_space(args.space)
+    identity = identity_of(args, "operator")
+    if identity is not None:
+        return TripleSpace.open(
+            args.connect,
+            space=args.space or "default",
+            agent=agent,
+            config_file=args.config,
+            identity=identity,
+        )
     session = open_session(args.connect, config_file=args.config)
     try:
         name = pick_space(args.space, store_spaces(session, args.timeout), create=create)
