@@ -436,11 +436,19 @@ function redraw() {
   }
 }
 
+// Redraw at most every REDRAW_MS: a charging battery changes the state every tick, and
+// a page that re-lays its charts on each change would keep the browser busy.
+const REDRAW_MS = 400;
+let lastRedraw = 0;
+
 function queueRedraw() {
-  if (!redrawQueued) {
-    redrawQueued = true;
-    requestAnimationFrame(redraw);
-  }
+  if (redrawQueued) return;
+  redrawQueued = true;
+  const wait = Math.max(0, lastRedraw + REDRAW_MS - performance.now());
+  setTimeout(() => requestAnimationFrame(() => {
+    lastRedraw = performance.now();
+    redraw();
+  }), wait);
 }
 
 function addHistory(events, reset) {
