@@ -23,7 +23,7 @@ from space.reasoning.changes import ChangeLog
 from space.reasoning.checks import check_names, check_rule
 from space.reasoning.compile import CompiledRule, RuleIndex
 from space.reasoning.delta import Delta, Firing, Origin, Why
-from space.reasoning.errors import RuleError, unreadable
+from space.reasoning.errors import RuleError, RuleLoopError, unreadable
 from space.reasoning.joins import JoinCompiler, Match
 from space.reasoning.owl import owl_rules
 from space.reasoning.parser import load_rules
@@ -147,7 +147,8 @@ class RuleEngine:
 
         Raises:
             RuleError: the engine was loaded already (use `apply`).
-            RuleLoopError: production rules did not settle; nothing was loaded.
+            RuleLoopError: production rules did not settle; the state is loaded without
+                their firings (see `apply`).
         """
         if self._loaded:
             raise RuleError("load() starts a new engine; this one is loaded, use apply()")
@@ -162,7 +163,9 @@ class RuleEngine:
         Raises:
             InputError: a triple is not three rdflib terms (IRI or blank node subject,
                 IRI predicate).
-            RuleLoopError: production rules kept firing; the state is as before the call.
+            RuleLoopError: production rules kept firing. Their firings are undone; the
+                caller's triples and what the monotonic rules draw from them are kept,
+                and the error's `kept` is that net change, to publish like any delta.
         """
         plus = [self._encode(t) for t in added]
         minus = [self._encode(t) for t in removed]
@@ -175,12 +178,31 @@ class RuleEngine:
             self._unassert(minus, notify=True)
             self._assert(plus, None)
             self._run_agenda()
+        except RuleLoopError as loop:
+            self._undo()
+            loop.kept = self._apply_monotonic(plus, minus)
+            raise
         except Exception:
             self._undo()
             raise
         self._loaded = True
         self._graph = None
         return self._log.delta(tuple(self._firings))
+
+    def _apply_monotonic(self, plus: list[T], minus: list[T]) -> Delta:
+        """Apply a change with production rules off: after a loop, the caller's triples stay."""
+        self._log.begin(plus, minus)
+        self._firings = []
+        self._production = False
+        try:
+            self._unassert(minus, notify=True)
+            self._assert(plus, None)
+        finally:
+            self._production = True
+            self._agenda.reset()
+        self._loaded = True
+        self._graph = None
+        return self._log.delta(())
 
     def why(self, triple: Triple) -> Why | None:
         """Return why a triple holds: asserted, or a rule and its premises; None if it does not."""
