@@ -64,7 +64,7 @@ class RobotState:
 
 
 @dataclass(frozen=True)
-class Firing:
+class Answer:
     """A changeset that answered another one (a rule firing or an agent reacting).
 
     Attributes:
@@ -210,7 +210,7 @@ def _noise(triple: Triple) -> bool:
     return any(isinstance(t, BNode) for t in triple)
 
 
-def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firing]:
+def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Answer]:
     """Return the last `limit` changesets that name a cause, newest first."""
     records = list(records)
     by_id = {r.id: r for r in records}
@@ -222,7 +222,7 @@ def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firin
         stamp = record.timestamp.strftime("%H:%M:%S.%f")[:-3] if record.timestamp else ""
         names = sorted({str(o) for _, p, o in record.added if p == AC.rule_name})
         firings.append(
-            Firing(
+            Answer(
                 seq=record.seq,
                 agent=record.agent,
                 time=stamp,
