@@ -35,7 +35,7 @@ def open_server(
         ConfigError: an endpoint or the configuration file is malformed.
         ListenFailed: the router cannot listen (the port is taken, say).
     """
-    from space.paths import default_data_dir
+    from space._paths import default_data_dir
 
     session = open_router(listen, connect=connect, config_file=config_file)
     try:

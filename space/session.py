@@ -7,8 +7,8 @@ import socket
 
 import zenoh
 
+from space._ports import probe
 from space.errors import ListenFailed, SpaceUnavailable, clause
-from space.ports import probe
 from space.zconfig import make_config, zenoh_reason
 
 # "Can not create a new TCP listener bound to tcp/127.0.0.1:7447: [127.0.0.1:7447:

@@ -16,7 +16,7 @@ from space.reasoning import Origin, RuleEngine
 
 AC = Namespace(AC_NS)
 EX = Namespace("http://example.org/")
-ROUNDS = 8
+ROUNDS = 5
 PATIENTS = [AC.patient_jon, AC.patient_ane]
 
 

@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Parse the documents, then send one changeset and wait for the store."""
-    from space.turtle import read_turtle
+    from space._turtle import read_turtle
 
     if args.file is None and args.remove is None:
         raise UsageError("give a FILE to add and/or --remove FILE")
