@@ -36,6 +36,7 @@ from space import (
     add_connect,
     declare_agent,
     freeze_startup,
+    identity_of,
 )
 
 Values = Mapping[tuple[Node, Node], Node | None]
@@ -92,8 +93,9 @@ class Agent:
         self.started = False
         self._token: zenoh.LivelinessToken | None = None
         self._subscription: Subscription | None = None
-        self._inbox: queue.SimpleQueue[Change | None] = queue.SimpleQueue()
+        self._inbox: queue.SimpleQueue[Change | Callable[[], None] | None] = queue.SimpleQueue()
         self._stop = threading.Event()
+        self._early: list[Callable[[], None]] = []
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -119,6 +121,7 @@ class Agent:
                         space=self.args.space,
                         agent=self.name,
                         config_file=self.args.config,
+                        identity=identity_of(self.args, self.name),
                     )
                     self._token = declare_agent(self.ts.session, self.ts.space, self.name)
                 self._subscription = self.subscribe()
@@ -177,6 +180,14 @@ class Agent:
         self._stop.set()
         self._inbox.put(None)
 
+    def call_soon(self, work: Callable[[], None]) -> None:
+        """Run `work` on the loop's thread soon, then tick; safe from any thread.
+
+        What a Zenoh callback must not do itself (write to the space, call a
+        service) it hands over so. Work before the view is rebuilt waits for it.
+        """
+        self._inbox.put(work)
+
     def shutdown(self) -> None:
         """Settle the writes in flight, close the subscription, the token and the space."""
         try:
@@ -192,13 +203,21 @@ class Agent:
 
     # Handling
 
-    def _handle(self, change: Change) -> None:
+    def _handle(self, change: Change | Callable[[], None]) -> None:
+        if not isinstance(change, Change):
+            if self.started:
+                self._guarded(change, "work")
+            else:
+                self._early.append(change)
+            return
         if self.keeps_view:
             self.view.apply(change, snapshot=not self.started)
         if not self.started:
             self.started = True
             self.log.info("view rebuilt from the space: %d triples", len(self.view))
             self._guarded(self.on_start, "start")
+            while self._early:
+                self._guarded(self._early.pop(0), "work")
         else:
             self._guarded(lambda: self.on_change(change), f"change {change.id}")
 

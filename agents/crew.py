@@ -101,7 +101,9 @@ class Crew(Agent):
         super().setup()
         assert self.ts is not None
         for member in self.members:
-            member.ts = TripleSpace(self.ts.session, self.ts.space, agent=member.name)
+            member.ts = TripleSpace(
+                self.ts.session, self.ts.space, agent=member.name, writer=self.ts.writer
+            )
             self._tokens.append(declare_agent(self.ts.session, self.ts.space, member.name))
         self.log.info("crew of %d agents for %d robots", len(self.members), len(self.robots))
 

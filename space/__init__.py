@@ -9,7 +9,7 @@ from space._ports import any_free_port
 from space._ports import probe as probe_port
 from space._turtle import read_turtle
 from space.changeset import Changeset
-from space.cli.options import add_connect
+from space.cli.options import add_connect, identity_of
 from space.client import Transaction, TripleSpace
 from space.errors import (
     ChangesetRejected,
@@ -23,6 +23,7 @@ from space.errors import (
 )
 from space.functional import Replacement, declares_functional, replace_functional
 from space.heap import freeze_startup, refreeze
+from space.identity import Identity, load_identity
 from space.keys import ROOT as KEY_ROOT
 from space.keys import escape as escape_key_chunk
 from space.keys import unescape as unescape_key_chunk
@@ -34,15 +35,17 @@ from space.session import check_can_listen
 from space.subscription import Change, Subscription
 from space.template import Template
 from space.terms import Triple, triple_to_nt
-from space.zconfig import DEFAULT_ENDPOINT, make_config
+from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT, make_config
 
 __all__ = [
     "DEFAULT_ENDPOINT",
     "KEY_ROOT",
+    "SECURE_ENDPOINT",
     "Change",
     "ChangeRecord",
     "Changeset",
     "ChangesetRejected",
+    "Identity",
     "InputError",
     "MalformedPayload",
     "Pending",
@@ -68,6 +71,8 @@ __all__ = [
     "default_data_dir",
     "escape_key_chunk",
     "freeze_startup",
+    "identity_of",
+    "load_identity",
     "make_config",
     "probe_port",
     "read_turtle",
