@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Iterable
+from dataclasses import replace
 from typing import NoReturn
 
 from rdflib import Literal
@@ -10,6 +12,8 @@ from rdflib import Literal
 from space.reasoning.builtins import Effect, Place
 from space.reasoning.errors import RuleError
 from space.reasoning.rules import Call, Functor, Location, Pattern, Rule, Var, variables
+
+log = logging.getLogger("space.reasoning")
 
 
 def located(where: Location | None, rule_name: str | None, message: str) -> str:
@@ -53,23 +57,32 @@ def check_rule(rule: Rule) -> None:
             _fail(rule, item.where, f"variable {free[0]} in the head is not bound by the body")
 
 
-def check_names(rules: Iterable[Rule]) -> None:
-    """Check that no two rules of one rule set share a name: firings and `why` name rules.
+def mark_shared_names(rules: Iterable[Rule], *, warn: bool = False) -> list[Rule]:
+    """Return the rules, those whose name another one has marked so their labels say where.
 
-    Raises:
-        RuleError: at the second rule of a name, saying where the first one is.
+    Jena accepts a name used twice; firings and `why` then name each rule by name and
+    `file:line`. With `warn`, log a warning at each later use naming the first.
     """
-    first: dict[str, Location | None] = {}
+    rules = list(rules)
+    first: dict[str, Rule] = {}
+    shared: set[str] = set()
     for rule in rules:
         if rule.name is None:
             continue
-        if rule.name not in first:
-            first[rule.name] = rule.where
-        elif first[rule.name] == rule.where and rule.where is not None:
-            again = f"{rule.where.file} is read twice (included or given again)"
-            _fail(rule, None, f"duplicate rule name: {again}")
+        if rule.name in first:
+            shared.add(rule.name)
+            if warn:
+                log.warning(
+                    "%s: rule name '%s' is used again, first at %s",
+                    rule.where or "<rule>",
+                    rule.name,
+                    first[rule.name].where or "<rule>",
+                )
         else:
-            _fail(rule, None, f"duplicate rule name, first used at {first[rule.name]}")
+            first[rule.name] = rule
+    return [
+        replace(r, shared_name=True) if r.name in shared and not r.shared_name else r for r in rules
+    ]
 
 
 def _fail(rule: Rule, where: Location | None, message: str) -> NoReturn:
