@@ -20,10 +20,11 @@ from space.errors import InputError
 from space.reasoning.agenda import Agenda
 from space.reasoning.builtins import Context, Registry, default_registry
 from space.reasoning.changes import ChangeLog
-from space.reasoning.checks import check_names, check_rule
+from space.reasoning.checks import check_rule, mark_shared_names
 from space.reasoning.compile import CompiledRule, RuleIndex
 from space.reasoning.delta import Delta, Firing, Origin, Why
 from space.reasoning.errors import RuleError, unreadable
+from space.reasoning.forms import value_patterns
 from space.reasoning.joins import JoinCompiler, Match
 from space.reasoning.owl import owl_rules
 from space.reasoning.parser import load_rules
@@ -46,7 +47,7 @@ class RuleEngine:
         printer: where the `print` builtin writes.
 
     Raises:
-        RuleError: a rule cannot be used, or two rules share a name.
+        RuleError: a rule cannot be used.
 
     Not thread-safe: one owner calls `load`, then `apply`, from one thread.
     """
@@ -62,10 +63,10 @@ class RuleEngine:
         printer: Callable[[str], None] = print,
     ) -> None:
         self.registry = registry or default_registry()
-        self.rules = tuple(rules)
+        self.rules = tuple(mark_shared_names(rules))
         for rule in self.rules:
             check_rule(rule)
-        check_names(self.rules)
+        runnable = [value_patterns(r, self.registry) for r in self.rules]
         tbox = ontology if isinstance(ontology, Graph) else _graph(ontology or ())
         self.terms = TermTable()
         self._store = TripleStore()
@@ -73,7 +74,7 @@ class RuleEngine:
         compiler = JoinCompiler(self.terms, self._store, self._ctx)
         index = RuleIndex()
         extra = owl_rules(tbox) if owl else []
-        self._compiled = [index.add(compiler, r, i) for i, r in enumerate([*self.rules, *extra])]
+        self._compiled = [index.add(compiler, r, i) for i, r in enumerate([*runnable, *extra])]
         self._index = index
         self._ontology = [self._encode(t) for t in tbox]
         self._asserted: set[T] = set()
