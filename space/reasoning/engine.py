@@ -175,6 +175,8 @@ class RuleEngine:
         try:
             self._unassert(minus, notify=True)
             self._assert(plus, None)
+            if not self._loaded:
+                self._start()
             self._run_agenda()
         except Exception:
             self._undo()
@@ -233,6 +235,31 @@ class RuleEngine:
                 self._asserted_by[t] = by
             if add(t):
                 queue.append(t)
+        if queue:
+            self._propagate(queue)
+
+    def _start(self) -> None:
+        """Fire the rules whose body has no triple (axioms, builtins only) once, at load."""
+        out: list[Match] = []
+        queue: list[T] = []
+        for compiled in self._compiled:
+            if compiled.start is None:
+                continue
+            compiled.start(0, 0, 0, out)
+            for match in out:
+                if compiled.production:
+                    self._agenda.push(compiled, match)
+                    continue
+                premises, bindings = match
+                for head in compiled.heads(bindings):
+                    self._support.record(head, compiled.order, premises)
+                    if head not in self._store.triples:
+                        self._log.touch(head)
+                        self._store.add(head)
+                        queue.append(head)
+                for builtin, args in compiled.actions:
+                    builtin.act(self._ctx, args(bindings))
+            out.clear()
         if queue:
             self._propagate(queue)
 
