@@ -115,9 +115,9 @@ class RuleEngine:
 
     def triples(self, origin: Origin | None = None) -> Iterator[Triple]:
         """Yield the current triples, or only the asserted or only the inferred ones."""
-        functors = self.terms.functors
+        functors, hidden = self.terms.functors, self._ctx.hidden
         for t in self._store:
-            if t[2] in functors:
+            if t[2] in functors or t[1] in hidden:
                 continue
             if origin is None or (t in self._asserted) == (origin is Origin.ASSERTED):
                 yield self._decode(t)
