@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-import logging
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import replace
 from typing import NoReturn
 
@@ -12,8 +11,6 @@ from rdflib import Literal
 from space.reasoning.builtins import Effect, Place
 from space.reasoning.errors import RuleError
 from space.reasoning.rules import Call, Functor, Location, Pattern, Rule, Var, variables
-
-log = logging.getLogger("space.reasoning")
 
 
 def located(where: Location | None, rule_name: str | None, message: str) -> str:
@@ -57,11 +54,13 @@ def check_rule(rule: Rule) -> None:
             _fail(rule, item.where, f"variable {free[0]} in the head is not bound by the body")
 
 
-def mark_shared_names(rules: Iterable[Rule], *, warn: bool = False) -> list[Rule]:
+def mark_shared_names(
+    rules: Iterable[Rule], warn: Callable[[str], None] | None = None
+) -> list[Rule]:
     """Return the rules, those whose name another one has marked so their labels say where.
 
     Jena accepts a name used twice; firings and `why` then name each rule by name and
-    `file:line`. With `warn`, log a warning at each later use naming the first.
+    `file:line`. `warn` is told of each later use, naming the first.
     """
     rules = list(rules)
     first: dict[str, Rule] = {}
@@ -72,12 +71,8 @@ def mark_shared_names(rules: Iterable[Rule], *, warn: bool = False) -> list[Rule
         if rule.name in first:
             shared.add(rule.name)
             if warn:
-                log.warning(
-                    "%s: rule name '%s' is used again, first at %s",
-                    rule.where or "<rule>",
-                    rule.name,
-                    first[rule.name].where or "<rule>",
-                )
+                where, before = rule.where or "<rule>", first[rule.name].where or "<rule>"
+                warn(f"{where}: rule name '{rule.name}' is used again, first at {before}")
         else:
             first[rule.name] = rule
     return [
@@ -102,8 +97,6 @@ def _check_pattern(rule: Rule, pattern: Pattern) -> None:
     for position, term in (("subject", pattern.s), ("predicate", pattern.p)):
         if isinstance(term, Functor):
             _fail(rule, pattern.where, f"a functor may only be an object, not the {position}")
-        if isinstance(term, Literal):
-            _fail(rule, pattern.where, f"a literal may not be the {position} of a triple")
     if isinstance(pattern.o, Functor) and any(isinstance(a, Functor) for a in pattern.o.args):
         _fail(rule, pattern.where, "nested functors are not supported")
 

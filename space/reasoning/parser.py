@@ -16,7 +16,8 @@ prefixes and is found relative to it.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+import logging
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
 from rdflib import BNode, Literal, URIRef
@@ -42,6 +43,7 @@ DEFAULT_PREFIXES = {
     "eg": "urn:x-hp:eg/",
     "xsd": "http://www.w3.org/2001/XMLSchema#",
 }
+log = logging.getLogger(__name__)
 # A word with one of these before its colon is a full IRI when no prefix of that name is known.
 _SCHEMES = ("http", "https", "urn", "file", "ftp", "mailto")
 _DATATYPE_SCHEMES = ("http", "urn", "ftp", "mailto")
@@ -53,10 +55,12 @@ def parse_rules(
     *,
     source: str = "<string>",
     prefixes: dict[str, str] | None = None,
+    warn: Callable[[str], None] | None = None,
 ) -> list[Rule]:
     """Parse the text of a rules file; `@include` paths resolve against `source`'s folder.
 
-    A rule name used twice is accepted, as Jena does, with a warning naming both places.
+    A rule name used twice is accepted, as Jena does, with a warning naming both places
+    (given to `warn`, by default logged).
 
     Raises:
         RuleSyntaxError: the text is not valid Jena rule syntax, or an include is missing.
@@ -64,18 +68,22 @@ def parse_rules(
             or a builtin input nothing binds.
     """
     rules = _Reader(registry, ()).read(text, source, dict(prefixes or DEFAULT_PREFIXES))
-    return mark_shared_names(rules, warn=True)
+    return mark_shared_names(rules, warn or log.warning)
 
 
-def load_rules(paths: Iterable[str | Path], registry: Registry) -> list[Rule]:
-    """Parse rules files in order, each file's includes first.
+def load_rules(
+    paths: Iterable[str | Path],
+    registry: Registry,
+    warn: Callable[[str], None] | None = None,
+) -> list[Rule]:
+    """Parse rules files in order, each file's includes first; warnings as `parse_rules`.
 
     Raises:
         RuleSyntaxError, RuleError: as `parse_rules`; a missing file is a RuleSyntaxError.
     """
     reader = _Reader(registry, ())
     rules = [rule for path in paths for rule in reader.read_file(Path(path), DEFAULT_PREFIXES)]
-    return mark_shared_names(rules, warn=True)
+    return mark_shared_names(rules, warn or log.warning)
 
 
 class _Reader:
