@@ -111,7 +111,7 @@ def test_include_cycle_and_missing_file_are_errors():
             "in rule 'r1': drop(1): body item 1 is not a triple",
         ),
         (
-            "\n[r2: (?a ?b ?c) -> (?a ?b ?d)]",
+            "\n[r2: (?a ?b ?c) -> print(?d)]",
             "t.rules:2:20: in rule 'r2': variable ?d in the head is not bound by the body",
         ),
         ("[r3: (?a x:b ?c) -> ]", "t.rules:1:10: in rule 'r3': unknown prefix 'x:'"),

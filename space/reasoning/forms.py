@@ -19,7 +19,7 @@ from rdflib import Literal
 from space.reasoning.builtins import Builtin, Effect, Registry
 from space.reasoning.checks import located
 from space.reasoning.errors import RuleError
-from space.reasoning.rules import Call, Functor, Item, Pattern, Rule, Term, Var
+from space.reasoning.rules import Call, Functor, Item, Pattern, Rule, Term, Var, variables
 
 _NUMBERS = (int, float, Decimal)
 
@@ -90,3 +90,49 @@ def _by_value(term: Term, tests: list[Call], equal: Builtin, item: Pattern) -> T
 def _numeric(term: Literal) -> bool:
     value = term.value
     return isinstance(value, _NUMBERS) and not isinstance(value, bool)
+
+
+def blank_head_variables(rule: Rule, registry: Registry) -> Rule:
+    """Return the rule with each head occurrence of a variable the body does not bind made a
+    blank node, as Jena does: one per occurrence and match (a `makeSkolem` of the match)."""
+    skolem = registry.get("makeSkolem")
+    bound = _bound(rule)
+    if skolem is None or all(_vars_bound(i, bound) for i in rule.head):
+        return rule
+    key = tuple(sorted(bound, key=lambda v: v.name))
+    calls: list[Call] = []
+
+    def blank(term: Term, where: object) -> Term:
+        if isinstance(term, Functor):
+            return Functor(term.name, tuple(blank(a, where) for a in term.args))
+        if not isinstance(term, Var) or term in bound:
+            return term
+        var = Var(f" blank{len(calls)}")
+        tag = Literal(f"{rule.label} {where} {len(calls)}")
+        calls.append(Call(skolem, (var, tag, *key), item.where))
+        return var
+
+    head: list[Item] = []
+    for item in rule.head:
+        if isinstance(item, Pattern):
+            s, p, o = (blank(t, item.where) for t in item.terms)
+            item = Pattern(s, p, o, item.where)
+        head.append(item)
+    return Rule(rule.name, (*rule.body, *calls), tuple(head), rule.where, rule.backward)
+
+
+def _bound(rule: Rule) -> set[Var]:
+    bound: set[Var] = set()
+    for item in rule.body:
+        if isinstance(item, Pattern):
+            bound.update(v for t in item.terms for v in variables(t))
+        elif isinstance(item, Call):
+            outputs = item.builtin.outputs(len(item.args))
+            bound.update(a for i, a in enumerate(item.args) if i in outputs and isinstance(a, Var))
+    return bound
+
+
+def _vars_bound(item: Item, bound: set[Var]) -> bool:
+    if not isinstance(item, Pattern):
+        return True
+    return all(v in bound for t in item.terms for v in variables(t))

@@ -25,7 +25,8 @@ from rdflib import BNode, Literal, URIRef
 from space.reasoning.builtins import Registry
 from space.reasoning.checks import check_rule, located, mark_shared_names
 from space.reasoning.errors import RuleError, RuleSyntaxError, unreadable
-from space.reasoning.forms import flatten
+from space.reasoning.forms import blank_head_variables, flatten
+from space.reasoning.listmaps import expand_list_maps
 from space.reasoning.rules import Call, Functor, Item, Location, Pattern, Rule, Term, Var
 from space.reasoning.rulesets import is_builtin_ruleset, read_builtin_ruleset
 from space.reasoning.tokens import Directive, Kind, Token, lex
@@ -124,9 +125,11 @@ class _Reader:
             yield from self.include(directive, source, prefixes)
         parser = _Parser(lexed.tokens, lexed.end, self.registry, prefixes)
         while not parser.done():
-            for rule in flatten(parser.rule()):
-                check_rule(rule)
-                yield rule
+            for nested in flatten(parser.rule()):
+                for rule in expand_list_maps(nested, self.registry):
+                    rule = blank_head_variables(rule, self.registry)
+                    check_rule(rule)
+                    yield rule
 
     def include(
         self, directive: Directive, source: str, prefixes: dict[str, str]

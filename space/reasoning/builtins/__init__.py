@@ -7,6 +7,7 @@ from space.reasoning.builtins import (
     arithmetic,
     compare,
     kinds,
+    listmap,
     lists,
     nodes,
     strings,
@@ -29,5 +30,6 @@ def default_registry() -> Registry:
             *actions.BUILTINS,
             *lists.BUILTINS,
             *tabling.BUILTINS,
+            *listmap.BUILTINS,
         )
     )
