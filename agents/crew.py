@@ -67,6 +67,7 @@ class Crew(Agent):
         ]
         for member in self.members:
             member.view = self.view  # one view for all: the space is the same
+            member.writes = self.writes  # one thread settles all their writes
         self._tokens: list[zenoh.LivelinessToken] = []
         self._touched: set[Node] = set()
         self._full_tick_at = 0.0

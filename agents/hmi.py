@@ -195,7 +195,7 @@ class Hmi(Agent):
                 if not self.view.objects(individual, RDF.type):
                     raise CommandError(f"no {key} {params[key]!r} in the space")
                 values[(robot, predicate)] = individual
-        return self.set_values(values)
+        return self.set_values(values, wait=True)
 
     def _command(self, name: str, params: dict) -> str | None:
         """Carry out a command from the page; return the changeset id (None: no change).
@@ -221,7 +221,8 @@ class Hmi(Agent):
             {
                 (battery, AC.battery_level): Literal(level),
                 (battery, AC.charge_percent): Literal(middle_of(level, thresholds)),
-            }
+            },
+            wait=True,
         )
 
     def _why(self, templates: list) -> list[dict]:

@@ -4,10 +4,14 @@ This list is the library's API: an application (the robot's agents under
 `agents/`) imports from here and from `space.reasoning`, nothing deeper.
 """
 
+from space._display import triple_text
+from space._paths import default_data_dir
+from space._ports import any_free_port
+from space._ports import probe as probe_port
+from space._turtle import read_turtle
 from space.changeset import Changeset
 from space.cli.options import add_connect, identity_of
 from space.client import Transaction, TripleSpace
-from space.display import triple_text
 from space.errors import (
     ChangesetRejected,
     InputError,
@@ -27,9 +31,6 @@ from space.keys import ROOT as KEY_ROOT
 from space.keys import escape as escape_key_chunk
 from space.keys import unescape as unescape_key_chunk
 from space.mirror import ChangeRecord, SpaceMirror
-from space.paths import default_data_dir
-from space.ports import any_free_port
-from space.ports import probe as probe_port
 from space.prefixes import PrefixMap
 from space.presence import alive_agents, declare_agent, watch_agents
 from space.request import Pending
@@ -37,7 +38,6 @@ from space.session import check_can_listen
 from space.subscription import Change, Subscription
 from space.template import Template
 from space.terms import Triple, from_nt, triple_to_nt
-from space.turtle import read_turtle
 from space.why import WhyService
 from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT, make_config
 

@@ -16,7 +16,7 @@ from collections import deque
 from dataclasses import dataclass
 from typing import TextIO
 
-from agents.runtime.robotview import Firing, RobotState
+from agents.runtime.robotview import Answer, RobotState
 from agents.runtime.supervisor import ProcessStatus
 
 REDRAW_EVERY = 0.25
@@ -28,7 +28,7 @@ class Frame:
 
     header: str
     robots: list[RobotState]
-    firings: list[Firing]
+    firings: list[Answer]
     processes: list[ProcessStatus]
     footer: str = ""
 
@@ -50,7 +50,7 @@ def devices_line(robot: RobotState) -> str:
     return ", ".join(f"{d.name.removeprefix(prefix)} {d.mode or '?'}" for d in robot.devices)
 
 
-def firing_line(firing: Firing, raw: bool = False) -> str:
+def firing_line(firing: Answer, raw: bool = False) -> str:
     """Return a firing on one line: its sentence and rules, or (`raw`) its triples and cause."""
     if firing.sentence and not raw:
         rules = f" [{', '.join(firing.rules)}]" if firing.rules else ""

@@ -65,7 +65,7 @@ class RobotState:
 
 
 @dataclass(frozen=True)
-class Firing:
+class Answer:
     """A changeset that answered another one (a rule firing or an agent reacting).
 
     Attributes:
@@ -218,7 +218,7 @@ def read_firings(
     limit: int = 20,
     graph: Graph | None = None,
     said: dict[str, str] | None = None,
-) -> list[Firing]:
+) -> list[Answer]:
     """Return the last `limit` changesets that name a cause, newest first.
 
     With `graph` (the space now), each is also said as a sentence; `said`
@@ -238,7 +238,7 @@ def read_firings(
         stamp = record.timestamp.strftime("%H:%M:%S.%f")[:-3] if record.timestamp else ""
         names = sorted({str(o) for _, p, o in record.added if p == AC.rule_name})
         firings.append(
-            Firing(
+            Answer(
                 seq=record.seq,
                 agent=record.agent,
                 time=stamp,

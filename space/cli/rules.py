@@ -31,7 +31,7 @@ def run_check(args: argparse.Namespace) -> int:
     failed = 0
     for path in args.files:
         try:
-            rules = load_rules([path], registry)
+            rules = load_rules([path], registry, warn=_warn)
         except RuleError as exc:
             print(exc, file=sys.stderr)
             failed += 1
@@ -42,3 +42,7 @@ def run_check(args: argparse.Namespace) -> int:
             kind = "production" if any(not c.builtin.monotonic for c in calls) else "monotonic"
             print(f"  {rule.where}  {rule.label}  ({kind})")
     return 1 if failed else 0
+
+
+def _warn(message: str) -> None:
+    print(f"tspace rules: warning: {message}", file=sys.stderr)

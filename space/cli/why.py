@@ -49,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
         template = Template.parse(args.triple, prefixes)
         trees = ts.why(template, limit=args.limit, timeout=args.timeout)
     if args.format == "json":
-        from space.display import triple_text
+        from space._display import triple_text
 
         def text(triple: Triple) -> str:
             return triple_text(triple, prefixes)
@@ -75,7 +75,7 @@ def print_tree(tree: Explanation, prefixes: PrefixMap, out: TextIO) -> None:
 def _node(
     node: Explanation, prefixes: PrefixMap, out: TextIO, lead: str, branch: str, under: str
 ) -> None:
-    from space.display import triple_text
+    from space._display import triple_text
 
     out.write(f"{lead}{branch}{triple_text(node.triple, prefixes)}\n")
     detail = lead + under + ("│  " if node.premises else "   ")

@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _read(source: str) -> Graph:
     """Parse a document, saying what it does on stderr when it is big."""
-    from space.turtle import read_turtle
+    from space._turtle import read_turtle
 
     size = os.path.getsize(source) if source != "-" and os.path.isfile(source) else 0
     if size < PROGRESS_BYTES:
