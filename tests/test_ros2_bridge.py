@@ -176,9 +176,20 @@ def test_what_the_bridge_sends_decodes_with_rosbags_and_carries_an_attachment(
 
     wait_for(lambda: low in limits() and len(sent("/robot1/current_task")) >= 2, 10,
              "low speed limit and task received", proc.logs)  # fmt: skip
-    wait_for(lambda: sent("/robot1/controller_server/set_parameters"), 10, "parameter set")
+
+    def speed_parameters() -> list[float]:
+        return [
+            p.value.double_value
+            for r in sent("/robot1/controller_server/set_parameters")
+            for p in store.deserialize_cdr(
+                bytes.fromhex(r["payload"]), r["type"] + "_Request"
+            ).parameters
+        ]
+
+    wait_for(lambda: low in speed_parameters(), 10, "the controller's speed parameter set")
     jazzy = get_typestore(Stores.ROS2_JAZZY)
     writers: dict[str, list[tuple[int, bytes]]] = {}  # key -> (sequence, gid) in order
+    parameters: list[float] = []
     for record in robot.received():
         payload, att = bytes.fromhex(record["payload"]), bytes.fromhex(record["attachment"])
         ros_type = record["type"] + ("_Request" if "service" in record else "")
@@ -195,11 +206,17 @@ def test_what_the_bridge_sends_decodes_with_rosbags_and_carries_an_attachment(
             assert message.header.stamp.sec > 0
         if record.get("topic") == "/robot1/current_task":
             assert bytes(jazzy.serialize_cdr(message, "std_msgs/msg/String")) == payload
+        if record.get("service") == "/robot1/controller_server/set_parameters":
+            (parameter,) = message.parameters
+            assert parameter.name == "FollowPath.max_vel_x"
+            assert parameter.value.type == 3  # PARAMETER_DOUBLE
+            parameters.append(parameter.value.double_value)
     tasks = [
         store.deserialize_cdr(bytes.fromhex(r["payload"]), r["type"]).data
         for r in sent("/robot1/current_task")
     ]
     assert tasks[-1] == "Charging"
+    assert parameters[-1] == pytest.approx(low)
     # Each writer numbers its samples 1, 2, 3... (clients per request) under one GID.
     for key, seen in writers.items():
         assert [n for n, _ in seen] == list(range(1, len(seen) + 1)), key
