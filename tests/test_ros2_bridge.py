@@ -395,3 +395,47 @@ def test_the_graph_sees_the_robots_nodes_and_topics(server, standin):
             assert [s.endpoint.ros_type for s in servers] == ["lifecycle_msgs/srv/ChangeState"]
         finally:
             graph.close()
+
+
+def test_a_state_changed_behind_the_bridges_back_is_led_back(space, launch, standin, server):
+    robot = standin()
+    proc = bridge(launch)
+    wait_for(lambda: mode(space, "robot1_screen") == "active", 20, "screen active", proc.logs)
+    store = typestore()
+    key = (
+        "0/robot1/screen/change_state/lifecycle_msgs::srv::dds_::ChangeState_/"
+        + (HASH["lifecycle_msgs/srv/ChangeState"])
+    )
+    request = store.types["lifecycle_msgs/srv/ChangeState_Request"](
+        transition=store.types["lifecycle_msgs/msg/Transition"](id=4, label="deactivate")
+    )
+    # As `ros2 lifecycle set /robot1/screen deactivate` would, from another client.
+    with zenoh.open(client_config(server.endpoint)) as session:
+        attachment = struct.pack("<qqB", 1, time.time_ns(), 16) + bytes(16)
+        replies = list(
+            session.get(
+                key,
+                payload=bytes(
+                    store.serialize_cdr(request, "lifecycle_msgs/srv/ChangeState_Request")
+                ),
+                attachment=attachment,
+                target=zenoh.QueryTarget.ALL_COMPLETE,
+                timeout=5,
+            )
+        )
+    assert [r.ok is not None for r in replies] == [True]
+
+    def activations() -> int:
+        return sum(
+            1
+            for r in robot.received()
+            if r.get("service") == "/robot1/screen/change_state"
+            and store.deserialize_cdr(
+                bytes.fromhex(r["payload"]), "lifecycle_msgs/srv/ChangeState_Request"
+            ).transition.id
+            == 3
+        )
+
+    # The space commands active: within a poll the bridge sees it and activates again.
+    wait_for(lambda: activations() >= 1, 15, "the bridge reactivating the screen", proc.logs)
+    wait_for(lambda: mode(space, "robot1_screen") == "active", 10, "screen active again")
