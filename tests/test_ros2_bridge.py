@@ -89,14 +89,15 @@ def mode(ts, device: str) -> str | None:
 
 
 def test_battery_state_becomes_the_robots_battery_facts(space, launch, standin):
-    robot = standin("--charge", "62", "--rate", "20")
+    robot = standin("--charge", "62", "--rate", "20", "--warn", "laser")
     proc = bridge(launch)
     wait_for(lambda: value(space, AC.robot1_battery, AC.charge_percent) == Literal(60), 20,
              "charge 60 from BatteryState", proc.logs)  # fmt: skip
     assert value(space, AC.robot1_battery, AC.battery_level) == Literal("normal")
     # Diagnostics: faults of every mapped device, modes of the unmanaged ones.
-    wait_for(lambda: value(space, AC.robot1_laser, AC.fault) == Literal("none"), 10)
-    assert mode(space, "robot1_wheels") == "active"
+    wait_for(lambda: mode(space, "robot1_wheels") == "active", 10, "wheels' mode", proc.logs)
+    assert value(space, AC.robot1_laser, AC.fault) == Literal("warning")
+    assert value(space, AC.robot1_wheels, AC.fault) == Literal("none")
     # The managed nodes report their lifecycle state: active.
     wait_for(lambda: mode(space, "robot1_screen") == "active", 10, "screen's mode", proc.logs)
     assert value(space, AC.robot1_screen, AC.ros_status) == Literal("ok")
