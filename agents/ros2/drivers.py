@@ -136,7 +136,10 @@ class ManagedNode(LatestWins):
     def reach(self, wish: Any) -> bool:
         """Take the transitions from the node's state to `wish` (None: only ask), one by one."""
         current = self.state()
-        while wish is not None and (transition := next_transition(current, wish)) is not None:
+        for _ in range(len(_NEXT)):  # a node that says "done" but stays put is not asked forever
+            transition = None if wish is None else next_transition(current, wish)
+            if transition is None:
+                break
             request = self._codec.new(
                 "lifecycle_msgs/srv/ChangeState_Request", transition={"id": transition}
             )
