@@ -16,7 +16,7 @@ from typing import Any
 
 from agents.ros2.errors import ServiceFailed, ServiceTimeout
 from agents.ros2.node import Client, Node
-from space.errors import MalformedPayload
+from space import MalformedPayload
 
 log = logging.getLogger("ros2.drivers")
 RETRY = 2.0
