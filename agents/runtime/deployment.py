@@ -62,6 +62,12 @@ def client_endpoint(listen: str) -> str:
     return listen
 
 
+def identity_of_agent(agent: AgentSpec) -> str:
+    """Return the identity `tspace certs init --fleet` made for an agent: KIND.ROBOT or KIND."""
+    kind = agent.name.split("/")[0]
+    return f"{kind}.{agent.robot}" if agent.robot else kind
+
+
 class Deployment:
     """Run a launch file until stopped.
 
@@ -92,9 +98,11 @@ class Deployment:
         self.scenario: ScenarioRun | None = None
         self.robot = launch.robots[0] if launch.robots else "robot1"
         self.hmi_port: int | None = None
-        self.operator = (
-            None if options.secure is None else load_identity(options.secure, "operator")
-        )
+        self.operator = None
+        if options.secure is not None:  # every certificate is there, or say which is not, now
+            self.operator = load_identity(options.secure, "operator")
+            for agent in launch.agents:
+                load_identity(options.secure, identity_of_agent(agent))
 
     def hmi_agent(self) -> AgentSpec | None:
         """Return the launch file's HMI agent, if it has one."""
@@ -105,10 +113,9 @@ class Deployment:
         argv = [sys.executable, "-m", agent.module, "--connect", self.connect]
         argv += ["--space", self.launch.space]
         if self.options.secure is not None:
-            # The identity `tspace certs init --fleet` made for it, KIND.ROBOT or KIND, is
-            # its name too: the routers let it declare a liveliness token under that name only.
-            kind = agent.name.split("/")[0]
-            identity = f"{kind}.{agent.robot}" if agent.robot else kind
+            # Its identity is its name too: the routers let it declare a liveliness token
+            # under that name only.
+            identity = identity_of_agent(agent)
             argv += ["--secure", str(self.options.secure), "--identity", identity]
             argv += ["--name", identity]
         if agent.robot:
@@ -134,6 +141,8 @@ class Deployment:
         Must be called from the main thread (it installs SIGINT and SIGTERM handlers).
 
         Raises:
+            ConfigError: with `secure`, a process's certificate is missing (checked at
+                construction, before anything starts).
             ConfigError, ListenFailed: the store's router could not listen on `listen`
                 (checked before anything starts, so the user reads why at once).
             InputError: the HMI's port, named by `--hmi-port` or the launch file, is taken.
