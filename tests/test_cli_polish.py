@@ -147,3 +147,12 @@ def test_tspace_reason_says_bad_data_in_one_line(tmp_path):
             out.stderr.split(message, 1)[1] if message.endswith(": ") else "\n"
         ), (name, out.stderr)
         assert len(out.stderr.splitlines()) == 1, (name, out.stderr)
+
+
+def test_rules_check_refuses_a_file_without_rules(tmp_path):
+    empty = tmp_path / "empty.rules"
+    empty.write_text("# nothing yet\n@prefix ac: <https://w3id.org/tspace/selfconfig#>.\n")
+    out = tspace("rules", "check", str(empty), str(REPO / "rules" / "paper.rules"))
+    assert out.returncode == 1
+    assert out.stderr == f"{empty}: no rules in it\n"
+    assert "paper.rules: 3 rules" in out.stdout  # the other files are still checked
