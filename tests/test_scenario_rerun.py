@@ -63,7 +63,15 @@ def test_the_scenario_reruns_after_an_interrupt_at_every_step(tmp_path):
         # The HMI rebuilt the robot's history from the store's log: the last run, after the
         # reset that started it (the page starts the robot's history again there).
         url = f"http://127.0.0.1:{up.hmi_port}/api/history"
-        wait_for(lambda: b'"firing"' in urllib.request.urlopen(url, timeout=5).read(), 30)
+
+        def history_read() -> bool:
+            try:
+                with urllib.request.urlopen(url, timeout=5) as reply:
+                    return b'"firing"' in reply.read()
+            except OSError:
+                return False  # the HMI is still starting
+
+        wait_for(history_read, 60, "the HMI's history", up.logs)
         with urllib.request.urlopen(url, timeout=5) as reply:
             kinds = [e["kind"] for e in json.load(reply) if e["robot"] == "robot1"]
         last_run = kinds[len(kinds) - kinds[::-1].index("reset") :]
