@@ -14,6 +14,7 @@ import json
 import signal
 import urllib.request
 
+import pytest
 from test_scenario_battery import HOSPITAL, STEPS, completed_steps, needs_reasoner
 from uprun import Up, alive
 
@@ -25,6 +26,7 @@ def gone(up: Up) -> bool:
 
 
 @needs_reasoner
+@pytest.mark.timeout(900)  # eleven runs of tspace up: minutes on a busy machine
 def test_the_scenario_reruns_after_an_interrupt_at_every_step(tmp_path):
     for step in range(1, len(STEPS) + 1):
         with Up(tmp_path, HOSPITAL, "--scenario", "battery") as up:
