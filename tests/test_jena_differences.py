@@ -56,3 +56,24 @@ def test_backward_conclusions_are_seen_by_forward_rules_unlike_jenas_hybrid_engi
         [(EX.a, EX.p, EX.b)],
     )
     assert (EX.a, EX.r, EX.b) in engine  # Jena (hybrid): no ex:r, forward rules miss ex:q
+
+
+def test_java_regex_classes_are_translated_and_what_python_lacks_is_refused_on_load():
+    engine = run(
+        "@prefix ex: <http://example.org/>\n"
+        "(?x ex:name ?n), regex(?n, '(\\\\p{Alpha}+)-(\\\\p{Digit}+)', ?w, ?d) -> (?x ex:num ?d) .",
+        [(EX.r, EX.name, Literal("robot-42"))],
+    )
+    assert set(engine.graph.objects(EX.r, EX.num)) == {Literal("42")}
+    with pytest.raises(RuleError, match=r"t.rules:1:13: regex\(\): .*\\p\{InGreek\} is not supp"):
+        parse_rules("(?x ?p ?n), regex(?n, '\\\\p{InGreek}') -> (?x ?p ?p) .", REG, source="t.rules")
+
+
+def test_an_unbound_head_variable_is_the_same_blank_node_when_derived_again():
+    engine = run("[r: (?a <http://example.org/p> ?b) -> (?a <http://example.org/q> ?c)]")
+    engine.apply(added=[(EX.a, EX.p, EX.b)])
+    (first,) = engine.graph.objects(EX.a, EX.q)
+    engine.apply(removed=[(EX.a, EX.p, EX.b)])
+    assert not list(engine.graph.objects(EX.a, EX.q))
+    engine.apply(added=[(EX.a, EX.p, EX.b)])
+    assert list(engine.graph.objects(EX.a, EX.q)) == [first]  # Jena: a new blank node
