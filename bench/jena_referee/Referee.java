@@ -5,6 +5,9 @@
 //        MODE: forward | forwardRETE | hybrid; OUT gets the closure as sorted N-Triples,
 //        or "error: message" when Jena fails, "timeout: ..." after 30 s (and the JVM
 //        exits with status 3 so that no stuck thread spoils the next jobs).
+//   steps <TAB> MODE <TAB> RULES <TAB> OUT <TAB> STEPS
+//        STEPS holds N-Triples lines prefixed "+ " (add) or "- " (remove), and "=" lines;
+//        at each "=" the closure is appended to OUT after a line "# state N".
 import java.io.*;
 import java.nio.file.*;
 import java.util.*;
@@ -23,7 +26,9 @@ public class Referee {
             String[] result = {"timeout: Jena gave no answer in " + LIMIT_SECONDS + " s\n"};
             Thread worker = new Thread(() -> {
                 try {
-                    result[0] = job[0].equals("parse") ? parse(job[1]) : run(job[1], job[2], job[4]);
+                    result[0] = job[0].equals("parse") ? parse(job[1])
+                            : job[0].equals("steps") ? steps(job[1], job[2], job[4])
+                            : run(job[1], job[2], job[4]);
                 } catch (Throwable e) {
                     result[0] = "error: " + e.getClass().getSimpleName() + ": " + e.getMessage() + "\n";
                 }
@@ -45,14 +50,37 @@ public class Referee {
         return "ok " + rules(path).size() + "\n";
     }
 
-    static String run(String mode, String path, String data) {
-        Model model = ModelFactory.createDefaultModel();
-        for (String file : data.split(",")) if (!file.isEmpty()) RDFDataMgr.read(model, file);
+    static InfModel infer(String mode, String path, Model model) {
         GenericRuleReasoner reasoner = new GenericRuleReasoner(rules(path));
         reasoner.setMode(mode.equals("forward") ? GenericRuleReasoner.FORWARD
                 : mode.equals("forwardRETE") ? GenericRuleReasoner.FORWARD_RETE
                 : GenericRuleReasoner.HYBRID);
-        InfModel inf = ModelFactory.createInfModel(reasoner, model);
+        return ModelFactory.createInfModel(reasoner, model);
+    }
+
+    static String steps(String mode, String path, String file) throws IOException {
+        InfModel inf = infer(mode, path, ModelFactory.createDefaultModel());
+        StringBuilder b = new StringBuilder();
+        int state = 0;
+        for (String line : Files.readAllLines(Paths.get(file))) {
+            if (line.startsWith("=")) {
+                b.append("# state ").append(state++).append('\n').append(closure(inf));
+                continue;
+            }
+            Model one = ModelFactory.createDefaultModel();
+            RDFDataMgr.read(one, new StringReader(line.substring(2)), null, Lang.NTRIPLES);
+            if (line.startsWith("+")) inf.add(one); else inf.remove(one);
+        }
+        return b.toString();
+    }
+
+    static String run(String mode, String path, String data) {
+        Model model = ModelFactory.createDefaultModel();
+        for (String file : data.split(",")) if (!file.isEmpty()) RDFDataMgr.read(model, file);
+        return closure(infer(mode, path, model));
+    }
+
+    static String closure(InfModel inf) {
         Model out = ModelFactory.createDefaultModel();
         out.add(inf.listStatements());
         StringWriter w = new StringWriter();
