@@ -68,3 +68,14 @@ def test_rules_check_accepts_a_jena_file_with_a_name_used_twice_and_warns(tmp_pa
         in captured.err
     )
     assert f"r1 ({rules}:4)" in captured.out
+
+
+def test_rules_check_warns_that_a_rule_after_a_prefix_on_its_line_is_dropped(tmp_path, capsys):
+    rules, _ = _files(
+        tmp_path,
+        "@prefix pre: <http://jena.hpl.hp.com/prefix#> [rule1: (?f pre:father ?a) -> (?a pre:x ?f)]\n",
+    )
+    assert main(["rules", "check", rules]) == 0
+    captured = capsys.readouterr()
+    assert "0 rules" in captured.out  # as Jena reads it: the line is the prefix's
+    assert f"{rules}:1:1: text after @prefix's <...> is ignored" in captured.err
