@@ -57,8 +57,10 @@ def classpath(work: Path) -> str:
                 target = shim / "xerces" / name.removeprefix("org/apache/jena/ext/xerces/")
                 target.parent.mkdir(parents=True, exist_ok=True)
                 target.write_bytes(jar.read(name))
-    skip = re.compile(r"-\d[^/]*\.jar$|slf4j-(jdk14|log4j12|simple|jcl|migrator)|maven3-slf4j|"
-                      r"log4j-over|jcl-over|jul-to")
+    skip = re.compile(
+        r"-\d[^/]*\.jar$|slf4j-(jdk14|log4j12|simple|jcl|migrator)|maven3-slf4j|"
+        r"log4j-over|jcl-over|jul-to"
+    )
     jars = [str(j) for j in sorted(JAVA.glob("*.jar")) if not skip.search(j.name)]
     return ":".join([str(shim), *jars])
 

@@ -73,7 +73,7 @@ def test_rules_check_accepts_a_jena_file_with_a_name_used_twice_and_warns(tmp_pa
 def test_rules_check_warns_that_a_rule_after_a_prefix_on_its_line_is_dropped(tmp_path, capsys):
     rules, _ = _files(
         tmp_path,
-        "@prefix pre: <http://jena.hpl.hp.com/prefix#> [rule1: (?f pre:father ?a) -> (?a pre:x ?f)]\n",
+        "@prefix pre: <http://jena.hpl.hp.com/prefix#> [r1: (?f pre:father ?a) -> (?a pre:x ?f)]\n",
     )
     assert main(["rules", "check", rules]) == 0
     captured = capsys.readouterr()
