@@ -78,3 +78,12 @@ def test_an_unbound_head_variable_is_the_same_blank_node_when_derived_again():
     assert not list(engine.graph.objects(EX.a, EX.q))
     engine.apply(added=[(EX.a, EX.p, EX.b)])
     assert list(engine.graph.objects(EX.a, EX.q)) == [first]  # Jena: a new blank node
+
+
+def test_a_regex_with_more_outputs_than_groups_does_not_match_where_jena_binds_what_it_has():
+    engine = run(
+        "@prefix ex: <http://example.org/>\n"
+        "(?x ex:name ?n), regex(?n, 'robot-(.*)', ?id, ?more) -> (?x ex:id ?id) .",
+        [(EX.r, EX.name, Literal("robot-42"))],
+    )
+    assert not list(engine.graph.objects(EX.r, EX.id))  # Jena: "42" (and ?more unbound)
