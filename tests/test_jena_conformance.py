@@ -15,7 +15,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
-from rdflib import Graph
+from rdflib import BNode, Graph
 from rdflib.compare import isomorphic
 from rdflib.util import from_n3
 
@@ -111,8 +111,14 @@ def test_bundled_rule_set_on_jena_test_data_answers_as_jena(case, caplog):
     jena = _ntriples(answer)
     if case in KNOWN:
         assert not isomorphic(ours, jena), f"{case} now answers as Jena: update KNOWN and docs"
+        # The hybrid difference only adds: every triple Jena gives (blank nodes aside) is here.
+        assert _ground(jena) <= _ground(ours), _diff(ours, jena)
     else:
         assert isomorphic(ours, jena), _diff(ours, jena)
+
+
+def _ground(graph: Graph) -> set:
+    return {t for t in graph if not any(isinstance(x, BNode) for x in t)}
 
 
 def _cases() -> list[str]:
