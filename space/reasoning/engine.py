@@ -134,9 +134,9 @@ class RuleEngine:
         ids = [None if x is None else self.terms.find(x) for x in pattern]
         if any(i is None and x is not None for i, x in zip(ids, pattern, strict=True)):
             return  # a term the engine never saw: nothing matches
-        functors = self.terms.functors
+        functors, hidden = self.terms.functors, self._ctx.hidden
         for t in self._store.match(*ids):
-            if t[2] not in functors:
+            if t[2] not in functors and t[1] not in hidden and t[0] not in functors:
                 yield self._decode(t)
 
     def __contains__(self, triple: object) -> bool:
