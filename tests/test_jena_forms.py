@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from rdflib import OWL, RDF, RDFS, Literal, Namespace
 
-from space.reasoning import RuleEngine, default_registry, parse_rules
+from space.reasoning import RuleEngine, default_registry, load_rules, parse_rules
 
 EX = Namespace("http://example.org/")
 REG = default_registry()
@@ -84,3 +84,18 @@ def test_table_is_accepted_and_hide_hides_from_listings_but_not_from_rules():
     )
     assert (EX.a, EX.seen, EX.b) in e
     assert (EX.a, EX.secret, EX.b) not in set(e.graph)
+
+
+def test_hidden_predicates_are_not_matched_either():
+    e = engine(
+        "-> hide(ex:secret).\n[s: (?x ex:p ?y) -> (?x ex:secret ?y)]\n", [(EX.a, EX.p, EX.b)]
+    )
+    assert list(e.match(EX.a, None, None)) == [(EX.a, EX.p, EX.b)]
+
+
+def test_include_takes_a_file_url_relative_to_the_including_file(tmp_path):
+    (tmp_path / "inner.rules").write_text("[inner: (?a ex:p ?b) -> (?b ex:p ?a)]\n")
+    outer = tmp_path / "outer.rules"
+    outer.write_text(HEAD + "@include <file:inner.rules>\n[outer: (?a ex:q ?b) -> (?a ex:p ?b)]\n")
+    rules = load_rules([outer], REG)
+    assert [r.name for r in rules] == ["inner", "outer"]  # included rules first, as in Jena
