@@ -17,6 +17,7 @@ prefixes and is found relative to it.
 from __future__ import annotations
 
 import logging
+import re
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
@@ -48,6 +49,7 @@ log = logging.getLogger(__name__)
 # A word with one of these before its colon is a full IRI when no prefix of that name is known.
 _SCHEMES = ("http", "https", "urn", "file", "ftp", "mailto")
 _DATATYPE_SCHEMES = ("http", "urn", "ftp", "mailto")
+_LANGUAGE = re.compile(r"@[A-Za-z]{1,8}(-[A-Za-z0-9]{1,8})*")
 
 
 def parse_rules(
@@ -310,7 +312,7 @@ class _Parser:
             if ":" in datatype:
                 datatype = self.expand(after, datatype, _DATATYPE_SCHEMES)
             return Literal(token.text, datatype=URIRef(datatype))
-        if after.kind is Kind.WORD and after.glued and after.text.startswith("@"):
+        if after.kind is Kind.WORD and after.glued and _LANGUAGE.fullmatch(after.text):
             self.next()
             return Literal(token.text, lang=after.text[1:])
         return Literal(token.text)
