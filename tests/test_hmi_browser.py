@@ -11,6 +11,7 @@ import base64
 import itertools
 import json
 import shutil
+import socket
 import subprocess
 import time
 import urllib.error
@@ -389,6 +390,9 @@ def test_a_cross_origin_post_is_refused_and_changes_nothing(page, deployment):
     assert post(f"{base}/api/battery", body, {**good, "Host": "evil.example"}) == 403
     with TripleSpace.open(f"tcp/127.0.0.1:{deployment.port}", space="ward") as ts:
         assert value(ts, AC.robot1_battery, AC.battery_level) == Literal("normal")
+    # The HMI serves this machine only (127.0.0.1), unless `--hmi-listen` says otherwise.
+    with pytest.raises(ConnectionRefusedError):
+        socket.create_connection(("127.0.0.2", deployment.hmi_port), timeout=5).close()
     # The page's own request, with its session's token and Origin, goes through.
     assert post(f"{base}/api/battery", body, good) == 200
     with TripleSpace.open(f"tcp/127.0.0.1:{deployment.port}", space="ward") as ts:

@@ -10,7 +10,9 @@ completed run, and a plain `tspace up` then resumes the robot, idle.
 
 from __future__ import annotations
 
+import json
 import signal
+import urllib.request
 
 from test_scenario_battery import HOSPITAL, STEPS, completed_steps, needs_reasoner
 from uprun import Up, alive
@@ -58,3 +60,11 @@ def test_the_scenario_reruns_after_an_interrupt_at_every_step(tmp_path):
         wait_for(lambda: up.stderr_has("resuming from them"), 30, "the resume", up.logs)
         wait_for(lambda: up.stdout_has("robot1: task Idle"), 30, "the robot to idle", up.logs)
         assert not up.stderr_has("started afresh")
+        # The HMI rebuilt the robot's history from the store's log: the last run, after the
+        # reset that started it (the page starts the robot's history again there).
+        url = f"http://127.0.0.1:{up.hmi_port}/api/history"
+        wait_for(lambda: b'"firing"' in urllib.request.urlopen(url, timeout=5).read(), 30)
+        with urllib.request.urlopen(url, timeout=5) as reply:
+            kinds = [e["kind"] for e in json.load(reply) if e["robot"] == "robot1"]
+        last_run = kinds[len(kinds) - kinds[::-1].index("reset") :]
+        assert {"battery", "task", "firing"} <= set(last_run), last_run

@@ -454,8 +454,8 @@ function queueRedraw() {
 function addHistory(events, reset) {
   if (reset) history.clear();
   for (const event of events) {
-    if (!history.has(event.robot)) history.set(event.robot, []);
-    history.get(event.robot).push(event);
+    if (event.kind === "reset" || !history.has(event.robot)) history.set(event.robot, []);
+    if (event.kind !== "reset") history.get(event.robot).push(event);
   }
   queueRedraw();
 }

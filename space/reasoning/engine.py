@@ -16,6 +16,7 @@ from pathlib import Path
 from rdflib import BNode, Graph, URIRef
 from rdflib.term import Node
 
+from space._turtle import read_turtle
 from space.errors import InputError
 from space.reasoning.agenda import Agenda
 from space.reasoning.builtins import Context, Registry, default_registry
@@ -402,6 +403,15 @@ def read_graph(paths: Iterable[str | Path]) -> Graph:
     """
     graph = Graph()
     for path in paths:
+        if _format(Path(path)) == "turtle":
+            # One-line errors with file and line (binary, not UTF-8, ill-typed literals too).
+            try:
+                graph += read_turtle(str(path), base=Path(path).resolve().as_uri())
+            except InputError as exc:
+                if isinstance(exc.__cause__, OSError):  # said as every unreadable file is
+                    raise InputError(unreadable(path, exc.__cause__)) from exc.__cause__
+                raise
+            continue
         try:
             # Opened here, not by rdflib, which names a missing relative path by a wrong
             # absolute one; the base for relative IRIs stays the file's own IRI.
