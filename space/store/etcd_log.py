@@ -1,0 +1,268 @@
+"""The replicated log: changesets group-committed into etcd transactions.
+
+`append(entry)` resolves once etcd has committed the entry, that is once a
+majority of members have it on disk; its `Position` (revision, index) is its
+place in the space's order. Entries waiting while a transaction is in flight
+go together into the next one (group commit: one Raft round for many
+changesets), which is how a 2-core host reaches thousands of changesets a
+second with 64 in flight.
+
+An entry carries the keys it writes and the guards its decision rests on
+(`key` still at the `mod_revision` it read, 0 for absent): take and the
+replacement of a functional value are decided by compare-and-swap inside the
+same transaction as the write. When a guard fails only that entry fails
+(`WriteConflict`, re-read and decide again); the rest of its batch is sent
+again at once. An entry whose guard reads a key an earlier entry of the batch
+writes waits for the next batch, where etcd judges it against that write.
+
+Each transaction also creates a marker key, and only if it is absent, so the
+client's retry of a transaction that timed out after committing is a no-op
+that reports the revision of the first commit: a changeset is never logged
+twice.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import logging
+import uuid
+from dataclasses import dataclass, field
+
+import msgpack
+from aetcd import rpc
+
+from space.errors import WriteConflict
+from space.store.cluster_keys import ROOT, batch_key, log_key
+from space.store.etcd_client import EtcdClient
+
+log = logging.getLogger("tspace.etcd")
+
+MAX_OPS = 4096  # below etcd's --max-txn-ops that etcd_member sets
+MAX_BYTES = 2 * 1024 * 1024  # below its --max-request-bytes
+MARKER_TTL = 60  # seconds a batch marker outlives its transaction (a retry comes sooner)
+
+
+@dataclass(frozen=True)
+class Position:
+    """Where a committed entry sits in its space's order: etcd revision, then index."""
+
+    revision: int
+    index: int
+
+
+@dataclass
+class Entry:
+    """One changeset to commit: its payload for the log, its writes and its guards."""
+
+    space: str
+    payload: bytes
+    puts: dict[bytes, bytes] = field(default_factory=dict)
+    deletes: list[bytes] = field(default_factory=list)
+    guards: dict[bytes, int] = field(default_factory=dict)  # key -> mod_revision read (0: absent)
+
+    def ops(self) -> int:
+        """Return how many transaction operations this entry costs."""
+        return 1 + len(self.puts) + len(self.deletes) + len(self.guards)
+
+    def size(self) -> int:
+        """Return roughly how many bytes this entry adds to a transaction."""
+        return (
+            len(self.payload)
+            + sum(len(k) + len(v) for k, v in self.puts.items())
+            + sum(len(k) for k in self.deletes)
+            + sum(len(k) + 8 for k in self.guards)
+        )
+
+
+_Waiting = tuple[Entry, "asyncio.Future[Position]"]
+
+
+class ClusterLog:
+    """Group-commit entries into etcd; one per replica process.
+
+    `await start()`, then `await append(entry)` from any task of the same
+    loop; `await close()` fails what is still queued. Raises `NoQuorum` (via
+    the client) when this side of a partition cannot commit.
+    """
+
+    def __init__(
+        self,
+        client: EtcdClient,
+        *,
+        root: bytes = ROOT,
+        node: str | None = None,
+        inflight: int = 2,
+    ) -> None:
+        self.client = client
+        self.root = root
+        self.node = node or uuid.uuid4().hex[:12]
+        self.inflight = inflight
+        self.transactions = 0  # committed transactions, for the benchmark's batch size
+        self._queue: list[_Waiting] = []
+        self._wake = asyncio.Event()
+        self._numbers = itertools.count(1)
+        self._lease = 0
+        self._lease_at = 0.0
+        self._tasks: list[asyncio.Task[None]] = []
+
+    async def start(self) -> None:
+        """Start the committers."""
+        self._tasks = [asyncio.create_task(self._commit_loop()) for _ in range(self.inflight)]
+
+    async def close(self) -> None:
+        """Stop committing; entries still queued fail with CancelledError."""
+        for task in self._tasks:
+            task.cancel()
+        await asyncio.gather(*self._tasks, return_exceptions=True)
+        self._tasks = []
+        for _, future in self._queue:
+            future.cancel()
+        self._queue = []
+
+    async def append(self, entry: Entry) -> Position:
+        """Commit one entry; return its position once a majority has it.
+
+        Raises `WriteConflict` when one of its guards failed (nothing of it
+        was written), `NoQuorum` or `ClusterError` when etcd could not commit
+        (it may still have: only a timeout is ambiguous, as with any store).
+        """
+        future: asyncio.Future[Position] = asyncio.get_running_loop().create_future()
+        self._queue.append((entry, future))
+        self._wake.set()
+        return await future
+
+    async def _commit_loop(self) -> None:
+        while True:
+            if not self._queue:
+                self._wake.clear()
+                await self._wake.wait()
+                continue
+            batch = self._take_batch()
+            try:
+                await self._commit(batch)
+            except asyncio.CancelledError:
+                for _, future in batch:
+                    future.cancel()
+                raise
+            except Exception as error:  # every waiter learns why its batch failed
+                for _, future in batch:
+                    if not future.done():
+                        future.set_exception(error)
+
+    def _take_batch(self) -> list[_Waiting]:
+        """Take queued entries up to the transaction's limits, leaving guarded conflicts."""
+        batch: list[_Waiting] = []
+        later: list[_Waiting] = []
+        written: set[bytes] = set()
+        ops = size = 0
+        for item in self._queue:
+            entry = item[0]
+            full = batch and (ops + entry.ops() > MAX_OPS or size + entry.size() > MAX_BYTES)
+            if full or any(k in written for k in entry.guards):
+                later.append(item)
+                continue
+            batch.append(item)
+            ops += entry.ops()
+            size += entry.size()
+            written.update(entry.puts)
+            written.update(entry.deletes)
+        self._queue = later
+        return batch
+
+    async def _commit(self, batch: list[_Waiting]) -> None:
+        while batch:
+            marker = batch_key(self.root, self.node, next(self._numbers))
+            request = await self._request(batch, marker)
+            reply = await self.client.txn(request)
+            if reply.succeeded:
+                self._resolve(batch, reply.header.revision)
+                return
+            first = reply.responses[0].response_range.kvs
+            if first:  # our own earlier attempt committed; this retry changed nothing
+                self._resolve(batch, first[0].mod_revision)
+                return
+            current = {
+                r.response_range.kvs[0].key: r.response_range.kvs[0].mod_revision
+                for r in reply.responses[1:]
+                if r.response_range.kvs
+            }
+            batch = self._fail_conflicts(batch, current)
+
+    def _resolve(self, batch: list[_Waiting], revision: int) -> None:
+        self.transactions += 1
+        counters: dict[str, int] = {}
+        for entry, future in batch:
+            index = counters.get(entry.space, 0)
+            counters[entry.space] = index + 1
+            if not future.done():
+                future.set_result(Position(revision, index))
+
+    @staticmethod
+    def _fail_conflicts(batch: list[_Waiting], current: dict[bytes, int]) -> list[_Waiting]:
+        """Fail the entries whose guards no longer hold; return the others."""
+        kept = []
+        for entry, future in batch:
+            changed = [k for k, rev in entry.guards.items() if current.get(k, 0) != rev]
+            if changed:
+                if not future.done():
+                    future.set_exception(WriteConflict(changed))
+            else:
+                kept.append((entry, future))
+        return kept
+
+    async def _request(self, batch: list[_Waiting], marker: bytes) -> rpc.TxnRequest:
+        compare = [
+            rpc.Compare(
+                key=marker,
+                result=rpc.Compare.EQUAL,
+                target=rpc.Compare.CREATE,
+                create_revision=0,
+            )
+        ]
+        guarded: dict[bytes, int] = {}
+        logs: dict[str, list[bytes]] = {}
+        # etcd refuses a key twice in one transaction: the batch's writes of one key
+        # merge into the last, which is what applying them one after another gives.
+        writes: dict[bytes, rpc.RequestOp] = {}
+        for entry, _ in batch:
+            guarded.update(entry.guards)
+            logs.setdefault(entry.space, []).append(entry.payload)
+            for key in entry.deletes:
+                writes.pop(key, None)
+                writes[key] = _delete(key)
+            for key, value in entry.puts.items():
+                writes.pop(key, None)
+                writes[key] = _put(key, value)
+        success = list(writes.values())
+        for key, revision in guarded.items():
+            compare.append(
+                rpc.Compare(
+                    key=key, result=rpc.Compare.EQUAL, target=rpc.Compare.MOD, mod_revision=revision
+                )
+            )
+        for space, payloads in logs.items():
+            success.append(_put(log_key(self.root, space), msgpack.packb(payloads)))
+        success.append(_put(marker, b"", lease=await self._marker_lease()))
+        failure = [_get(marker)] + [_get(key) for key in guarded]
+        return rpc.TxnRequest(compare=compare, success=success, failure=failure)
+
+    async def _marker_lease(self) -> int:
+        """Return a lease that expires the markers (a fresh one every half TTL)."""
+        now = asyncio.get_running_loop().time()
+        if not self._lease or now - self._lease_at > MARKER_TTL / 2:
+            self._lease = await self.client.grant(MARKER_TTL)
+            self._lease_at = now
+        return self._lease
+
+
+def _put(key: bytes, value: bytes, lease: int = 0) -> rpc.RequestOp:
+    return rpc.RequestOp(request_put=rpc.PutRequest(key=key, value=value, lease=lease))
+
+
+def _delete(key: bytes) -> rpc.RequestOp:
+    return rpc.RequestOp(request_delete_range=rpc.DeleteRangeRequest(key=key))
+
+
+def _get(key: bytes) -> rpc.RequestOp:
+    return rpc.RequestOp(request_range=rpc.RangeRequest(key=key))
