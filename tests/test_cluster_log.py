@@ -115,7 +115,7 @@ def test_group_commit_orders_every_changeset_once_on_every_replica(cluster):
 
 
 def test_two_takers_on_two_members_never_take_the_same_item(cluster):
-    """Each taker reads the item's revision and deletes it guarded by that revision."""
+    """Each taker read the items at one revision and deletes one, guarded: present, unchanged."""
 
     async def main() -> None:
         a_client, a_log = await _open(cluster.endpoints)
@@ -124,7 +124,13 @@ def test_two_takers_on_two_members_never_take_the_same_item(cluster):
         put = await a_log.append(Entry("s", b"docks", puts={k: b"free" for k in items}))
 
         async def take(clog: ClusterLog, who: str, key: bytes) -> str | None:
-            entry = Entry("s", f"{who} takes".encode(), deletes=[key], guards={key: put.revision})
+            entry = Entry(
+                "s",
+                f"{who} takes".encode(),
+                deletes=[key],
+                guards={key: put.revision},
+                present=[key],
+            )
             try:
                 await clog.append(entry)
                 return who
@@ -142,6 +148,26 @@ def test_two_takers_on_two_members_never_take_the_same_item(cluster):
         assert left.count == 0
         await _close(a_client, a_log)
         await _close(b_client, b_log)
+
+    asyncio.run(main())
+
+
+def test_a_take_fails_when_the_item_went_or_came_back_since_the_read(cluster):
+    async def main() -> None:
+        client, clog = await _open(cluster.endpoints)
+        key = triple_key(ROOT, "s", "t", "<patient1>", "<ac:waiting_for>", "<task1>")
+        read = await clog.append(Entry("s", b"add", puts={key: b"x"}))
+        await clog.append(Entry("s", b"other takes", deletes=[key]))
+
+        def take() -> Entry:
+            return Entry("s", b"take", deletes=[key], guards={key: read.revision}, present=[key])
+
+        with pytest.raises(WriteConflict):  # gone
+            await clog.append(take())
+        await clog.append(Entry("s", b"put back", puts={key: b"x"}))
+        with pytest.raises(WriteConflict):  # there again, but not the item that was read
+            await clog.append(take())
+        await _close(client, clog)
 
     asyncio.run(main())
 

@@ -7,13 +7,17 @@ go together into the next one (group commit: one Raft round for many
 changesets), which is how a 2-core host reaches thousands of changesets a
 second with 64 in flight.
 
-An entry carries the keys it writes and the guards its decision rests on
-(`key` still at the `mod_revision` it read, 0 for absent): take and the
-replacement of a functional value are decided by compare-and-swap inside the
-same transaction as the write. When a guard fails only that entry fails
-(`WriteConflict`, re-read and decide again); the rest of its batch is sent
-again at once. An entry whose guard reads a key an earlier entry of the batch
-writes waits for the next batch, where etcd judges it against that write.
+An entry carries the keys it writes and the guards its decision rests on:
+take and the replacement of a functional value are decided by
+compare-and-swap inside the same transaction as the write. A replica decides
+on its state at the revision R it has applied, so a guard says "this key is
+unchanged since R" (etcd: mod_revision < R + 1; a key absent then and now
+passes) and, for what a take removes, "and it is present" (version > 0):
+present now and untouched since R means present all along, so nobody else
+took it. When a guard fails only that entry fails (`WriteConflict`: catch up
+and decide again); the rest of its batch is sent again at once. An entry
+whose guard covers a key an earlier entry of the batch writes waits for the
+next batch, where etcd judges it against that write.
 
 Each transaction also creates a marker key, and only if it is absent, so the
 client's retry of a transaction that timed out after committing is a no-op
@@ -32,7 +36,7 @@ from dataclasses import dataclass, field
 import msgpack
 from aetcd import rpc
 
-from space.errors import WriteConflict
+from space.errors import ClusterError, WriteConflict
 from space.store.cluster_keys import ROOT, batch_key, log_key
 from space.store.etcd_client import EtcdClient
 
@@ -59,11 +63,12 @@ class Entry:
     payload: bytes
     puts: dict[bytes, bytes] = field(default_factory=dict)
     deletes: list[bytes] = field(default_factory=list)
-    guards: dict[bytes, int] = field(default_factory=dict)  # key -> mod_revision read (0: absent)
+    guards: dict[bytes, int] = field(default_factory=dict)  # key -> unchanged since this revision
+    present: list[bytes] = field(default_factory=list)  # guarded keys that must also exist
 
     def ops(self) -> int:
         """Return how many transaction operations this entry costs."""
-        return 1 + len(self.puts) + len(self.deletes) + len(self.guards)
+        return 1 + len(self.puts) + len(self.deletes) + len(self.guards) + len(self.present)
 
     def size(self) -> int:
         """Return roughly how many bytes this entry adds to a transaction."""
@@ -93,11 +98,13 @@ class ClusterLog:
         root: bytes = ROOT,
         node: str | None = None,
         inflight: int = 2,
+        batch: int = 256,
     ) -> None:
         self.client = client
         self.root = root
         self.node = node or uuid.uuid4().hex[:12]
         self.inflight = inflight
+        self.batch = batch  # entries per transaction at most
         self.transactions = 0  # committed transactions, for the benchmark's batch size
         self._queue: list[_Waiting] = []
         self._wake = asyncio.Event()
@@ -158,8 +165,13 @@ class ClusterLog:
         ops = size = 0
         for item in self._queue:
             entry = item[0]
-            full = batch and (ops + entry.ops() > MAX_OPS or size + entry.size() > MAX_BYTES)
-            if full or any(k in written for k in entry.guards):
+            full = batch and (
+                len(batch) >= self.batch
+                or ops + entry.ops() > MAX_OPS
+                or size + entry.size() > MAX_BYTES
+            )
+            guards = (*entry.guards, *entry.present)
+            if full or any(k in written for k in guards):
                 later.append(item)
                 continue
             batch.append(item)
@@ -187,7 +199,10 @@ class ClusterLog:
                 for r in reply.responses[1:]
                 if r.response_range.kvs
             }
-            batch = self._fail_conflicts(batch, current)
+            kept = self._fail_conflicts(batch, current)
+            if len(kept) == len(batch):
+                raise ClusterError("a transaction failed although every guard holds")
+            batch = kept
 
     def _resolve(self, batch: list[_Waiting], revision: int) -> None:
         self.transactions += 1
@@ -203,7 +218,8 @@ class ClusterLog:
         """Fail the entries whose guards no longer hold; return the others."""
         kept = []
         for entry, future in batch:
-            changed = [k for k, rev in entry.guards.items() if current.get(k, 0) != rev]
+            changed = [k for k, since in entry.guards.items() if current.get(k, 0) > since]
+            changed += [k for k in entry.present if k not in current]
             if changed:
                 if not future.done():
                     future.set_exception(WriteConflict(changed))
@@ -221,12 +237,15 @@ class ClusterLog:
             )
         ]
         guarded: dict[bytes, int] = {}
+        present: set[bytes] = set()
         logs: dict[str, list[bytes]] = {}
         # etcd refuses a key twice in one transaction: the batch's writes of one key
         # merge into the last, which is what applying them one after another gives.
         writes: dict[bytes, rpc.RequestOp] = {}
         for entry, _ in batch:
-            guarded.update(entry.guards)
+            for key, since in entry.guards.items():
+                guarded[key] = min(since, guarded.get(key, since))
+            present.update(entry.present)
             logs.setdefault(entry.space, []).append(entry.payload)
             for key in entry.deletes:
                 writes.pop(key, None)
@@ -235,12 +254,19 @@ class ClusterLog:
                 writes.pop(key, None)
                 writes[key] = _put(key, value)
         success = list(writes.values())
-        for key, revision in guarded.items():
+        for key, since in guarded.items():
             compare.append(
                 rpc.Compare(
-                    key=key, result=rpc.Compare.EQUAL, target=rpc.Compare.MOD, mod_revision=revision
+                    key=key, result=rpc.Compare.LESS, target=rpc.Compare.MOD, mod_revision=since + 1
                 )
             )
+        for key in present:
+            compare.append(
+                rpc.Compare(
+                    key=key, result=rpc.Compare.GREATER, target=rpc.Compare.VERSION, version=0
+                )
+            )
+            guarded.setdefault(key, 0)
         for space, payloads in logs.items():
             success.append(_put(log_key(self.root, space), msgpack.packb(payloads)))
         success.append(_put(marker, b"", lease=await self._marker_lease()))
