@@ -125,10 +125,12 @@ class Applier:
             pause = 0.05
 
     async def _readable(self, revision: int) -> bool:
-        """Return True if etcd still holds revision `revision` (not compacted away)."""
-        if revision == 0:
-            return False
-        request = rpc.RangeRequest(key=self.root, revision=revision, count_only=True)
+        """Return True if etcd still holds revision `revision` (not compacted away).
+
+        A new replica (revision 0) replays the log from its start when nothing
+        was compacted yet, and re-lists otherwise.
+        """
+        request = rpc.RangeRequest(key=self.root, revision=max(revision, 1), count_only=True)
         try:
             await self.client.range(request)
         except ClusterError as error:

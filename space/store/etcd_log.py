@@ -134,6 +134,11 @@ class ClusterLog:
         was written), `NoQuorum` or `ClusterError` when etcd could not commit
         (it may still have: only a timeout is ambiguous, as with any store).
         """
+        if entry.size() > MAX_BYTES or entry.ops() > MAX_OPS:
+            raise ClusterError(
+                f"a changeset of {entry.size()} bytes and {entry.ops()} keys is over one "
+                f"transaction's limits ({MAX_BYTES} bytes, {MAX_OPS} keys)"
+            )
         future: asyncio.Future[Position] = asyncio.get_running_loop().create_future()
         self._queue.append((entry, future))
         self._wake.set()
