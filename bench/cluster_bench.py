@@ -3,10 +3,10 @@
 Three etcd 3.4 members on this machine's loopback (`space.store.etcd_member`,
 the settings tspace runs etcd with), one client process with the replicated
 log (`space.store.etcd_log`, group commit). Each writer is one robot writing
-its own functional reading, as the store will append it: the changeset's
-payload for the log, the new triple's key, the old triple's key deleted, the
-(subject, property) key rewritten and guarded by the revision it read
-(compare-and-swap). A writer waits for its ack before its next write.
+its own functional reading, as the store appends it (`cluster_entries`): the
+changeset's payload for the log and the (subject, property) key rewritten,
+guarded by the revision its value was read at (compare-and-swap). A writer
+waits for its ack before its next write.
 
 Failover: with the writers running, kill -9 the leader; the figure is the time
 from the kill to the first ack of a write sent after it.
@@ -22,43 +22,49 @@ import argparse
 import asyncio
 import os
 import tempfile
+import uuid
 from pathlib import Path
 
 from _harness import OUT, median, percentile, print_table
 from aetcd import rpc
 
 from space.errors import NoQuorum
-from space.store.cluster_keys import ROOT, functional_key, triple_key
+from space.store.cluster_entries import Decision, entry_for
+from space.store.cluster_keys import ROOT
 from space.store.etcd_client import EtcdClient
 from space.store.etcd_log import ClusterLog, Entry
 from space.store.etcd_member import LocalCluster
 
 PAYLOAD = 600  # bytes: an encoded changeset of one reading, its prefixes, id, agent and HLC
+FUNCTIONAL = frozenset({"<https://w3id.org/tspace/selfconfig#batteryLevel>"})
 
 
 class Robot:
     """One writer: a robot's battery level, a functional property, rewritten each time."""
 
     def __init__(self, n: int) -> None:
-        self.s, self.p = f"<http://ex.org/robot{n}>", "<http://ex.org/ac#battery>"
-        self.fn = functional_key(ROOT, "bench", self.s, self.p)
-        self.read = 0  # mod_revision of the fn key as this robot last saw it
-        self.old: bytes | None = None
+        self.s = f"<http://ex.org/robot{n}-{uuid.uuid4().hex[:8]}>"  # new in every run
+        self.p = "<https://w3id.org/tspace/selfconfig#batteryLevel>"
+        self.read = 0  # the revision this robot's last write committed at: its replica's view
+        self.old: tuple[str, str, str] | None = None
         self.level = 0
 
     def entry(self) -> Entry:
+        """Return the entry the store makes of this reading (space.store.cluster_entries)."""
         self.level += 1
-        o = f'"{self.level}"^^<http://www.w3.org/2001/XMLSchema#integer>'
-        key = triple_key(ROOT, "bench", "t", self.s, self.p, o)
-        entry = Entry(
+        new = (self.s, self.p, f'"{self.level}"^^<http://www.w3.org/2001/XMLSchema#integer>')
+        decision = Decision(
             "bench",
             os.urandom(PAYLOAD),
-            puts={key: f"{self.s} {self.p} {o} .".encode(), self.fn: o.encode()},
-            deletes=[self.old] if self.old else [],
-            guards={self.fn: self.read},
+            self.read,
+            f"7452{self.level:012d}/0",
+            FUNCTIONAL,
+            added=[new],
+            removed=[self.old] if self.old else [],
+            replaced=[(self.s, self.p)],
         )
-        self.old = key
-        return entry
+        self.old = new
+        return entry_for(ROOT, decision)
 
 
 async def write_loop(clog: ClusterLog, robot: Robot, stop: float, acks: list[tuple[float, float]]):

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import Iterator
-from pathlib import Path
 
 import msgpack
 import pytest
@@ -21,33 +19,11 @@ from space.store.cluster_keys import ROOT, log_key, state_prefix, triple_key
 from space.store.etcd_applier import Applier, Batch, compact_behind_replicas
 from space.store.etcd_client import EtcdClient
 from space.store.etcd_log import ClusterLog, Entry
-from space.store.etcd_member import LocalCluster, etcd_missing
 
 
 @pytest.fixture
-def cluster(tmp_path: Path) -> Iterator[LocalCluster]:
-    reason = etcd_missing()
-    if reason:
-        pytest.skip(reason)
-    with LocalCluster(tmp_path) as c:
-        asyncio.run(_until_writable(c.endpoints))
-        yield c
-
-
-async def _until_writable(endpoints: list[str], timeout: float = 20.0) -> None:
-    client = EtcdClient(endpoints)
-    await client.open()
-    deadline = time.monotonic() + timeout
-    try:
-        while True:
-            try:
-                await client.range(rpc.RangeRequest(key=b"probe"))
-                return
-            except NoQuorum:
-                if time.monotonic() > deadline:
-                    raise
-    finally:
-        await client.close()
+def cluster(etcd_cluster):
+    return etcd_cluster
 
 
 class Replica:
