@@ -90,6 +90,34 @@ def test_group_commit_orders_every_changeset_once_on_every_replica(cluster):
     asyncio.run(main())
 
 
+def test_writes_of_one_key_commit_in_the_order_they_were_appended(cluster):
+    """Two transactions are in flight at once; per key, the later append never overtakes."""
+
+    async def main() -> None:
+        client = EtcdClient(cluster.endpoints)
+        await client.open()
+        clog = ClusterLog(client, batch=8)  # many small transactions, two in flight
+        await clog.start()
+        key = triple_key(ROOT, "s", "t", "<door1>", "<ac:state>", "<open>")
+        other = [triple_key(ROOT, "s", "t", f"<x{i}>", "<a>", "<b>") for i in range(200)]
+
+        def entry(i: int) -> Entry:
+            if i % 3 == 0:
+                return Entry("s", b"%d" % i, puts={key: b"%d" % i})
+            if i % 3 == 1:
+                return Entry("s", b"%d" % i, deletes=[key])
+            return Entry("s", b"%d" % i, puts={other[i]: b"x"})
+
+        positions = await asyncio.gather(*(clog.append(entry(i)) for i in range(199)))
+        touching = [(p.revision, p.index, i) for i, p in enumerate(positions) if i % 3 != 2]
+        assert [i for *_, i in sorted(touching)] == [i for *_, i in touching]
+        reply = await client.range(rpc.RangeRequest(key=key))
+        assert [kv.value for kv in reply.kvs] == [b"198"]
+        await _close(client, clog)
+
+    asyncio.run(main())
+
+
 def test_two_takers_on_two_members_never_take_the_same_item(cluster):
     """Each taker read the items at one revision and deletes one, guarded: present, unchanged."""
 

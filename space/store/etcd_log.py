@@ -31,6 +31,7 @@ import asyncio
 import itertools
 import logging
 import uuid
+from collections import Counter
 from dataclasses import dataclass, field
 
 import msgpack
@@ -107,6 +108,7 @@ class ClusterLog:
         self.batch = batch  # entries per transaction at most
         self.transactions = 0  # committed transactions, for the benchmark's batch size
         self._queue: list[_Waiting] = []
+        self._busy: Counter[bytes] = Counter()  # keys written by transactions in flight
         self._wake = asyncio.Event()
         self._numbers = itertools.count(1)
         self._lease = 0
@@ -146,11 +148,11 @@ class ClusterLog:
 
     async def _commit_loop(self) -> None:
         while True:
-            if not self._queue:
+            batch, written = self._take_batch()
+            if not batch:  # nothing queued, or all of it waits for a batch in flight
                 self._wake.clear()
                 await self._wake.wait()
                 continue
-            batch = self._take_batch()
             try:
                 await self._commit(batch)
             except asyncio.CancelledError:
@@ -161,31 +163,44 @@ class ClusterLog:
                 for _, future in batch:
                     if not future.done():
                         future.set_exception(error)
+            finally:
+                self._busy.subtract(written)
+                self._busy = +self._busy  # drop the keys no batch holds any more
+                self._wake.set()
 
-    def _take_batch(self) -> list[_Waiting]:
-        """Take queued entries up to the transaction's limits, leaving guarded conflicts."""
+    def _take_batch(self) -> tuple[list[_Waiting], set[bytes]]:
+        """Take queued entries up to the transaction's limits; return them and the keys written.
+
+        Per key, entries commit in the order they were appended: an entry that
+        touches a key a transaction in flight writes, or that an entry left
+        for later touches, waits; one whose guard covers a key an earlier entry
+        of this batch writes waits too (etcd checks guards before any write).
+        """
         batch: list[_Waiting] = []
         later: list[_Waiting] = []
         written: set[bytes] = set()
+        blocked: set[bytes] = set(self._busy)
         ops = size = 0
         for item in self._queue:
             entry = item[0]
+            writes = {*entry.puts, *entry.deletes}
+            guards = {*entry.guards, *entry.present}
             full = batch and (
                 len(batch) >= self.batch
                 or ops + entry.ops() > MAX_OPS
                 or size + entry.size() > MAX_BYTES
             )
-            guards = (*entry.guards, *entry.present)
-            if full or any(k in written for k in guards):
+            if full or guards & (written | blocked) or writes & blocked:
                 later.append(item)
+                blocked |= writes | guards
                 continue
             batch.append(item)
             ops += entry.ops()
             size += entry.size()
-            written.update(entry.puts)
-            written.update(entry.deletes)
+            written |= writes
         self._queue = later
-        return batch
+        self._busy.update(written)
+        return batch, written
 
     async def _commit(self, batch: list[_Waiting]) -> None:
         while batch:
