@@ -123,9 +123,7 @@ class LogFleet:
             proc.popen.send_signal(signal.SIGUSR1)
         began = time.monotonic()
         time.sleep(0.6)  # writes in flight (0.5 s per attempt) settle into the log or fail
-        self.net.wait(
-            lambda: len({self.revision(h) for h in NAMES}) == 1, 30, "identical replicas"
-        )
+        self.net.wait(lambda: len({self.revision(h) for h in NAMES}) == 1, 30, "identical replicas")
         return time.monotonic() - began
 
     def stop(self) -> None:

@@ -94,6 +94,7 @@ def test_a_relisted_state_is_what_the_decisions_made(etcd_cluster):
             added=[patient, (R2, DOCK, "<dock1>")],
             inferred_added=[inferred],
             replaced=[(R2, DOCK)],
+            prefixes={"ac": "https://w3id.org/tspace/selfconfig#"},
         )
         pos = await clog.append(entry_for(ROOT, made))
         take = Decision("s", b"take", pos.revision, removed=[patient], taken=[patient])
@@ -104,6 +105,7 @@ def test_a_relisted_state_is_what_the_decisions_made(etcd_cluster):
         assert image.asserted == [f"{R2} {DOCK} <dock1> .\n"]
         assert image.stamps == [(f"{R2} {DOCK} <dock1> .\n", "0001")]
         assert image.inferred == [" ".join(inferred) + " .\n"]
+        assert image.prefixes == {"ac": "https://w3id.org/tspace/selfconfig#"}
         history = await client.range(rpc.RangeRequest(key=ROOT + b"log/s"))
         assert msgpack.unpackb(history.kvs[0].value) == [b"take"]
         await clog.close()

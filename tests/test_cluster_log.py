@@ -16,7 +16,7 @@ from aetcd import rpc
 
 from space.errors import NoQuorum, WriteConflict
 from space.store.cluster_keys import ROOT, log_key, state_prefix, triple_key
-from space.store.etcd_applier import Applier, Batch, compact_behind_replicas
+from space.store.etcd_applier import Applier, Batch, Listing, compact_behind_replicas
 from space.store.etcd_client import EtcdClient
 from space.store.etcd_log import ClusterLog, Entry
 
@@ -31,7 +31,9 @@ class Replica:
 
     def __init__(self, revision: int = 0) -> None:
         self.applied: list[bytes] = []
+        self.seq_of: dict[bytes, int] = {}
         self.revisions: list[int] = []
+        self.seqs: dict[str, int] = {}
         self.state: dict[bytes, bytes] = {}
         self.start = revision
 
@@ -39,9 +41,12 @@ class Replica:
         self.revisions.append(revision)
         for batch in batches:
             self.applied.extend(batch.payloads)
+            for i, p in enumerate(batch.payloads):
+                self.seq_of[p] = batch.first_seq + i
 
-    def relist(self, revision: int, pairs: list[tuple[bytes, bytes]]) -> None:
-        self.state = dict(pairs)
+    def relist(self, listing: Listing) -> None:
+        self.state = dict(listing.pairs)
+        self.seqs = listing.seqs
 
 
 async def _open(endpoints: list[str], **kw: object) -> tuple[EtcdClient, ClusterLog]:
@@ -85,6 +90,7 @@ def test_group_commit_orders_every_changeset_once_on_every_replica(cluster):
             assert await a.wait_applied(last, 10), f"replica at {a.revision}, log at {last}"
         for r in replicas:
             assert r.applied == in_order
+            assert [r.seq_of[p] for p in in_order] == list(range(1, len(sent) + 1))
         await _close(client, clog, *appliers)
 
     asyncio.run(main())
@@ -225,11 +231,17 @@ def test_a_replica_resumes_from_its_revision(cluster):
             pos = await clog.append(Entry("s", f"after-{i}".encode()))
         again = Replica()
         second = Applier(
-            client, node="r", revision=first.revision, apply=again.apply, relist=again.relist
+            client,
+            node="r",
+            revision=first.revision,
+            seqs=first.seqs,
+            apply=again.apply,
+            relist=again.relist,
         )
         await second.start()
         assert await second.wait_applied(pos.revision, 10)
         assert again.applied == [f"after-{i}".encode() for i in range(5)]
+        assert [again.seq_of[p] for p in again.applied] == [6, 7, 8, 9, 10]
         assert second.relists == 0
         await _close(client, clog, second)
 
@@ -253,10 +265,12 @@ def test_a_replica_behind_a_compaction_relists_then_follows(cluster):
         assert await applier.wait_applied(last.revision, 10)
         assert applier.relists == 1
         assert replica.state == {key: b"kitchen"}
+        assert replica.seqs == {"s": 12}  # the space's 12 changesets, none of them replayed
         assert replica.applied == []  # nothing replayed: the state came whole
         after = await clog.append(Entry("s", b"after"))
         assert await applier.wait_applied(after.revision, 10)
         assert replica.applied == [b"after"]
+        assert replica.seq_of[b"after"] == 13
         await _close(client, clog, applier)
 
     asyncio.run(main())

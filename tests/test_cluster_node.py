@@ -20,7 +20,7 @@ def _node(cluster, name: str, applied: queue.SimpleQueue) -> ClusterNode:
                 applied.put((revision, p))
 
     return ClusterNode(
-        cluster.endpoints, node=name, revision=0, apply=apply, relist=lambda r, p: None
+        cluster.endpoints, node=name, revision=0, apply=apply, relist=lambda listing: None
     )
 
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import msgpack
 
-from space.store.cluster_keys import functional_key, state_prefix, triple_key
+from space.store.cluster_keys import functional_key, prefix_key, state_prefix, triple_key
 from space.store.etcd_log import Entry
 
 Text = tuple[str, str, str]  # (s, p, o) as N-Triples terms
@@ -40,6 +40,7 @@ class Decision:
     inferred_removed: list[Text] = field(default_factory=list)
     replaced: list[tuple[str, str]] = field(default_factory=list)  # functional (s, p) written
     taken: list[Text] = field(default_factory=list)  # removed by a take
+    prefixes: dict[str, str] = field(default_factory=dict)  # bindings new in this changeset
 
 
 def line(t: Text) -> str:
@@ -67,6 +68,8 @@ def entry_for(root: bytes, d: Decision) -> Entry:
         entry.puts[key] = value
     for t in d.inferred_added:
         entry.puts[triple_key(root, d.space, "i", *t)] = line(t).encode()
+    for name, iri in d.prefixes.items():
+        entry.puts[prefix_key(root, d.space, name)] = iri.encode()
     entry.deletes = [k for k in entry.deletes if k not in entry.puts]
     for s, p in d.replaced:
         entry.guards[functional_key(root, d.space, s, p)] = d.revision
@@ -84,13 +87,18 @@ class SpaceImage:
     asserted: list[str] = field(default_factory=list)  # N-Triples lines
     inferred: list[str] = field(default_factory=list)
     stamps: list[tuple[str, str]] = field(default_factory=list)  # (N-Triples line, HLC stamp)
+    prefixes: dict[str, str] = field(default_factory=dict)
 
 
 def read_state(root: bytes, pairs: Iterable[tuple[bytes, bytes]]) -> dict[str, SpaceImage]:
     """Return every space's image from the `(key, value)` pairs a re-list read."""
     spaces: dict[str, SpaceImage] = {}
-    state, fn = state_prefix(root), root + b"fn/"
+    state, fn, prefix = state_prefix(root), root + b"fn/", root + b"prefix/"
     for key, value in pairs:
+        if key.startswith(prefix):
+            space, name = key[len(prefix) :].decode().split("/", 1)
+            spaces.setdefault(space, SpaceImage()).prefixes[name] = value.decode()
+            continue
         if key.startswith(state):
             space, graph, _ = key[len(state) :].decode().split("/")
             image = spaces.setdefault(space, SpaceImage())

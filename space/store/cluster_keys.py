@@ -6,12 +6,15 @@ deployments can share an etcd cluster and one range covers each kind:
     ROOT log/SPACE            the changesets of SPACE committed at this revision (a list)
     ROOT state/SPACE/G/ID     one triple of graph G (t asserted, i inferred), value its text
     ROOT fn/SPACE/ID          the value and HLC stamp of one (subject, functional property)
+    ROOT prefix/SPACE/NAME    a prefix binding of SPACE
+    ROOT count/SPACE/I        put once by every transaction with more than I changesets of
+                              SPACE: the sum of their versions is the space's sequence number
     ROOT batch/NODE-N         marks a committed group-commit transaction (leased, 60 s)
     ROOT replicas/NODE        the revision a live replica has applied (leased)
 
-`state/` and `fn/` are what compare-and-swap decides on, and what a replica
-re-lists when its revision was compacted away; `log/` is what replicas apply,
-in etcd's revision order.
+`state/` and `fn/` are what compare-and-swap decides on, and with `prefix/`
+and `count/` what a replica re-lists when its revision was compacted away;
+`log/` is what replicas apply, in etcd's revision order.
 """
 
 from __future__ import annotations
@@ -65,3 +68,13 @@ def batch_key(root: bytes, node: str, n: int) -> bytes:
 def replica_key(root: bytes, node: str) -> bytes:
     """Return the key where replica `node` says which revision it has applied."""
     return root + b"replicas/" + node.encode()
+
+
+def count_key(root: bytes, space: str, i: int) -> bytes:
+    """Return the I-th counter key of SPACE (see the module's docstring)."""
+    return root + b"count/" + space.encode() + b"/%d" % i
+
+
+def prefix_key(root: bytes, space: str, name: str) -> bytes:
+    """Return the key of prefix `name` of SPACE."""
+    return root + b"prefix/" + space.encode() + b"/" + name.encode()

@@ -6,7 +6,7 @@ event loop in a daemon thread and offers the worker thread plain calls:
 
 - `append(entry)` returns a `concurrent.futures.Future` of the entry's
   position: the worker goes on deciding while 64 changesets are in flight;
-- `apply(revision, batches)` and `relist(revision, pairs)`, given at
+- `apply(revision, batches)` and `relist(listing)`, given at
   construction, are called in the loop thread for each committed revision:
   they must only hand the work to the worker (a queue), never block;
 - `read_barrier()` returns the revision etcd has committed now (a
@@ -48,12 +48,13 @@ class ClusterNode:
         revision: int,
         apply: Apply,
         relist: Relist,
+        seqs: dict[str, int] | None = None,
         root: bytes = ROOT,
     ) -> None:
         self.endpoints = list(endpoints)
         self.node = node
         self.root = root
-        self._start_revision = revision
+        self._start_revision, self._start_seqs = revision, dict(seqs or {})
         self._apply, self._relist = apply, relist
         self._loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self._loop.run_forever, name="tspace-etcd")
@@ -78,6 +79,7 @@ class ClusterNode:
             revision=self._start_revision,
             apply=self._apply,
             relist=self._relist,
+            seqs=self._start_seqs,
             root=self.root,
         )
         await self.applier.start()

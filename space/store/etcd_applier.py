@@ -31,7 +31,7 @@ from space.store.etcd_client import EtcdClient
 
 log = logging.getLogger("tspace.etcd")
 
-LIVENESS_TTL = 10  # seconds a silent replica still holds back compaction
+LIVENESS_TTL = 60  # seconds a silent replica still holds back compaction (a cut, a restart)
 REPORT_EVERY = 1.0
 COMPACT_EVERY = 10.0
 PAGE = 1000
@@ -39,23 +39,38 @@ PAGE = 1000
 
 @dataclass
 class Batch:
-    """What one space committed at one revision: its changesets' payloads, in order."""
+    """What one space committed at one revision: its changesets' payloads, in order.
+
+    `first_seq` is the space's sequence number of the first of them: every
+    replica numbers a space's changesets alike, 1, 2, ... in log order.
+    """
 
     space: str
     revision: int
     payloads: list[bytes]
+    first_seq: int = 0
+
+
+@dataclass
+class Listing:
+    """The whole state at one revision: every state key, and each space's sequence number."""
+
+    revision: int
+    pairs: list[tuple[bytes, bytes]]
+    seqs: dict[str, int]
 
 
 Apply = Callable[[int, list[Batch]], None]
-Relist = Callable[[int, list[tuple[bytes, bytes]]], None]
+Relist = Callable[[Listing], None]
 
 
 class Applier:
     """Follow the log from `revision` and hand every revision to `apply`, in order.
 
-    `apply(revision, batches)` and `relist(revision, pairs)` run in the event
-    loop and must not block; once either returns, the replica is at that
-    revision. `await start()`, `await close()`.
+    `apply(revision, batches)` and `relist(listing)` run in the event loop
+    and must not block; once either returns, the replica is at that revision.
+    `seqs` are the spaces' sequence numbers at `revision` (the replica's, as
+    stored with it). `await start()`, `await close()`.
     """
 
     def __init__(
@@ -66,11 +81,13 @@ class Applier:
         revision: int,
         apply: Apply,
         relist: Relist,
+        seqs: dict[str, int] | None = None,
         root: bytes = ROOT,
     ) -> None:
         self.client = client
         self.node = node
         self.revision = revision
+        self.seqs = dict(seqs or {})
         self.root = root
         self._apply = apply
         self._relist = relist
@@ -158,6 +175,9 @@ class Applier:
                 batch = Batch(space, kv.mod_revision, msgpack.unpackb(kv.value))
                 by_revision.setdefault(kv.mod_revision, []).append(batch)
             for revision in sorted(by_revision):
+                for batch in by_revision[revision]:
+                    batch.first_seq = self.seqs.get(batch.space, 0) + 1
+                    self.seqs[batch.space] = batch.first_seq + len(batch.payloads) - 1
                 self._apply(revision, by_revision[revision])
                 await self._advance(revision)
 
@@ -165,8 +185,10 @@ class Applier:
         """Read every state key at one revision, page by page, and hand them over."""
         self.relists += 1
         pairs: list[tuple[bytes, bytes]] = []
+        seqs: dict[str, int] = {}
         revision = 0
-        for prefix in (self.root + b"state/", self.root + b"fn/"):
+        counts = self.root + b"count/"
+        for prefix in (counts, *(self.root + p for p in (b"state/", b"fn/", b"prefix/"))):
             key = prefix
             while True:
                 request = rpc.RangeRequest(
@@ -174,11 +196,17 @@ class Applier:
                 )
                 reply = await self.client.range(request)
                 revision = revision or reply.header.revision
-                pairs.extend((kv.key, kv.value) for kv in reply.kvs)
+                for kv in reply.kvs:
+                    if prefix == counts:
+                        space = kv.key[len(counts) :].rsplit(b"/", 1)[0].decode()
+                        seqs[space] = seqs.get(space, 0) + kv.version
+                    else:
+                        pairs.append((kv.key, kv.value))
                 if not reply.more:
                     break
                 key = reply.kvs[-1].key + b"\x00"
-        self._relist(revision, pairs)
+        self.seqs = seqs
+        self._relist(Listing(revision, pairs, dict(seqs)))
         await self._advance(revision)
 
     async def _report(self) -> None:

@@ -53,8 +53,12 @@ _REQUIRE_LEADER = (("hasleader", "true"),)
 T = TypeVar("T")
 
 
-def _no_space(error: grpc.aio.AioRpcError) -> bool:
-    return "space exceeded" in (error.details() or "")
+def _retryable(error: grpc.aio.AioRpcError) -> bool:
+    details = error.details() or ""
+    if "space exceeded" in details:
+        return False  # the quota is full: retrying cannot help
+    # etcd's own deadline on a proposal it could not commit in time comes as UNKNOWN
+    return error.code() in _RETRY or "deadline exceeded" in details or "timed out" in details
 
 
 class EtcdClient:
@@ -185,7 +189,7 @@ class EtcdClient:
             try:
                 return await call(i, timeout)
             except grpc.aio.AioRpcError as error:
-                if error.code() not in _RETRY or _no_space(error):
+                if not _retryable(error):
                     raise ClusterError(f"etcd refused: {error.details()}") from error
                 failures += 1
                 log.debug("etcd %s: %s", self.endpoints[i], error.details())

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from space.errors import ClusterError, NoQuorum, WriteConflict
 from space.store.cluster_keys import ROOT, triple_key
-from space.store.etcd_applier import Applier, Batch
+from space.store.etcd_applier import Applier, Batch, Listing
 from space.store.etcd_client import EtcdClient
 from space.store.etcd_log import ClusterLog, Entry
 
@@ -74,10 +74,11 @@ class Node:
                 self.items.discard(int(p.rsplit(":", 1)[1]))
         self.applied.write(json.dumps({"rev": revision, "payloads": payloads}) + "\n")
 
-    def relist(self, revision: int, pairs: list[tuple[bytes, bytes]]) -> None:
-        keys = {k for k, _ in pairs}
+    def relist(self, listing: Listing) -> None:
+        keys = {k for k, _ in listing.pairs}
         self.items = {i for i in range(ITEMS) if item_key(i) in keys}
-        self.applied.write(json.dumps({"rev": revision, "relist": sorted(self.items)}) + "\n")
+        line = {"rev": listing.revision, "relist": sorted(self.items)}
+        self.applied.write(json.dumps(line) + "\n")
 
     def record(self, op: str, payload: str, ok: bool, error: str = "") -> None:
         line = {"op": op, "payload": payload, "ok": ok, "error": error, "t": time.time()}
