@@ -35,7 +35,7 @@ async def _log(endpoints: list[str]) -> tuple[EtcdClient, ClusterLog]:
 
 async def _relist(client: EtcdClient) -> dict:
     pairs = []
-    for prefix in (ROOT + b"state/", ROOT + b"fn/"):
+    for prefix in (ROOT + b"state/", ROOT + b"fn/", ROOT + b"prefix/"):
         reply = await client.range(rpc.RangeRequest(key=prefix, range_end=prefix_end(prefix)))
         pairs += [(kv.key, kv.value) for kv in reply.kvs]
     return read_state(ROOT, pairs)
