@@ -83,6 +83,7 @@ def run(name: str, scenario: Callable[[LogFleet], None]) -> list[object]:
         len(verdict.violations),
         f"{settle:.2f}",
         "; ".join(verdict.violations[:3]) or "-",
+        "; ".join(f"{n}x {m}" for m, n in verdict.reasons.most_common(3)) or "-",
     ]
 
 
@@ -102,7 +103,17 @@ def main(flap: float, cut: float) -> None:
         print(rows[-1], flush=True)
     print_table(
         "etcd log under faults, 3 hosts (netns), writers and takers on every host",
-        ["scenario", "s", "acked", "taken", "refused", "violations", "identical after s", "first"],
+        [
+            "scenario",
+            "s",
+            "acked",
+            "taken",
+            "refused",
+            "violations",
+            "identical after s",
+            "first violations",
+            "other refusals",
+        ],
         rows,
     )
 

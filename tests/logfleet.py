@@ -139,6 +139,7 @@ class Verdict:
     acknowledged: int = 0
     taken: int = 0
     refused: Counter = field(default_factory=Counter)
+    reasons: Counter = field(default_factory=Counter)  # the messages of ClusterError refusals
     violations: list[str] = field(default_factory=list)
 
 
@@ -174,5 +175,8 @@ def check(fleet: LogFleet) -> Verdict:
                 if counts[op["payload"]] != 1:
                     verdict.violations.append(f"acknowledged but not applied: {op['payload']}")
             else:
-                verdict.refused[op["error"].split(":")[0]] += 1
+                kind = op["error"].split(":")[0]
+                verdict.refused[kind] += 1
+                if kind == "ClusterError":
+                    verdict.reasons[op["error"]] += 1
     return verdict

@@ -9,7 +9,8 @@ deployments can share an etcd cluster and one range covers each kind:
     ROOT prefix/SPACE/NAME    a prefix binding of SPACE
     ROOT count/SPACE/I        put once by every transaction with more than I changesets of
                               SPACE: the sum of their versions is the space's sequence number
-    ROOT batch/NODE-N         marks a committed group-commit transaction (leased, 60 s)
+    ROOT batch/NODE-ID-N      marks a committed group-commit transaction (leased, 60 s);
+                              ID is new in every process, so a marker never repeats
     ROOT replicas/NODE        the revision a live replica has applied (leased)
 
 `state/` and `fn/` are what compare-and-swap decides on, and with `prefix/`
@@ -61,7 +62,7 @@ def functional_key(root: bytes, space: str, s: str, p: str) -> bytes:
 
 
 def batch_key(root: bytes, node: str, n: int) -> bytes:
-    """Return the marker key of group-commit transaction `n` of a node."""
+    """Return the marker key of group-commit transaction `n` of a node (its name and id)."""
     return root + f"batch/{node}-{n}".encode()
 
 

@@ -131,6 +131,7 @@ class Applier:
         while True:
             try:
                 if not await self._readable(self.revision):
+                    log.warning("revision %d was compacted away: re-listing", self.revision)
                     await self._relist_all()
                 await self._watch()
             except (grpc.aio.AioRpcError, NoQuorum, ClusterError, _Broken) as error:
@@ -235,7 +236,10 @@ class Applier:
         while True:
             await asyncio.sleep(COMPACT_EVERY)
             try:
-                compacted = await compact_behind_replicas(self.client, self.root, compacted)
+                done = await compact_behind_replicas(self.client, self.root, compacted)
+                if done != compacted:
+                    log.info("compacted etcd's history up to revision %d", done)
+                compacted = done
             except (NoQuorum, ClusterError) as error:
                 log.debug("cannot compact: %s", error)
 

@@ -103,7 +103,9 @@ class ClusterLog:
     ) -> None:
         self.client = client
         self.root = root
-        self.node = node or uuid.uuid4().hex[:12]
+        # Markers must never repeat, also across restarts of a node of the same name: a
+        # marker left by an earlier process would make a new transaction look committed.
+        self.node = f"{node or 'log'}-{uuid.uuid4().hex}"
         self.inflight = inflight
         self.batch = batch  # entries per transaction at most
         self.transactions = 0  # committed transactions, for the benchmark's batch size

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
+import os
 import signal
 import sys
 import time
@@ -31,6 +33,16 @@ ITEMS = 300
 WRITERS = 3
 TAKERS = 2
 PAUSE = 0.02
+SEEDED = ROOT + b"test/seeded"
+
+
+def whole_lines(path: Path) -> list[str]:
+    """Cut off a last line that kill -9 left half written (not applied); return the lines."""
+    text = path.read_bytes() if path.exists() else b""
+    if not text.endswith(b"\n"):
+        text = text[: text.rfind(b"\n") + 1]
+        path.write_bytes(text)
+    return text.decode().splitlines()
 
 
 def item_key(i: int) -> bytes:
@@ -40,21 +52,20 @@ def item_key(i: int) -> bytes:
 class Node:
     def __init__(self, name: str, out: Path, endpoints: list[str]) -> None:
         self.name, self.out = name, out
+        self.boot = os.urandom(3).hex()  # payloads stay unique across a restart
         self.client = EtcdClient(endpoints)
         self.items: set[int] = set()
+        whole_lines(out / f"{name}-ops.jsonl")
         self.ops = open(out / f"{name}-ops.jsonl", "a", buffering=1)
-        self.applied = open(out / f"{name}-applied.jsonl", "a", buffering=1)
         self.applier: Applier | None = None
+        self.last_error = ""
 
     def resume(self) -> int:
         """Return the revision of the last whole line applied before, and its items."""
         path = self.out / f"{self.name}-applied.jsonl"
         revision = 0
-        for line in path.read_text().splitlines() if path.exists() else ():
-            try:
-                done = json.loads(line)
-            except json.JSONDecodeError:
-                break  # a line cut by kill -9: not applied
+        for line in whole_lines(path):
+            done = json.loads(line)
             revision = done["rev"]
             if "relist" in done:
                 self.items = set(done["relist"])
@@ -89,14 +100,16 @@ class Node:
         try:
             await clog.append(entry)
         except (NoQuorum, ClusterError, WriteConflict) as error:
-            self.record(op, payload, False, f"{type(error).__name__}: {error}")
+            self.last_error = f"{type(error).__name__}: {error}"
+            self.record(op, payload, False, self.last_error)
             return False
         self.record(op, payload, True)
         return True
 
     async def writer(self, clog: ClusterLog, n: int) -> None:
         for i in range(1_000_000):
-            await self.attempt(clog, "write", Entry("f", f"w:{self.name}:{n}:{i}".encode()))
+            payload = f"w:{self.name}:{self.boot}:{n}:{i}".encode()
+            await self.attempt(clog, "write", Entry("f", payload))
             await asyncio.sleep(PAUSE)
 
     async def taker(self, clog: ClusterLog, n: int) -> None:
@@ -108,7 +121,7 @@ class Node:
             item = min(self.items)  # every taker wants the same item: the most contention
             key = item_key(item)
             since = self.applier.revision
-            payload = f"take:{self.name}:{n}:{item}".encode()
+            payload = f"take:{self.name}:{self.boot}:{n}:{item}".encode()
             entry = Entry("f", payload, deletes=[key], guards={key: since}, present=[key])
             if await self.attempt(clog, "take", entry):
                 continue
@@ -119,13 +132,18 @@ class Node:
         clog = ClusterLog(self.client, node=self.name)
         await clog.start()
         start = self.resume()
+        self.applied = open(self.out / f"{self.name}-applied.jsonl", "a", buffering=1)
         self.applier = Applier(
             self.client, node=self.name, revision=start, apply=self.apply, relist=self.relist
         )
         await self.applier.start()
         if self.name == "a" and start == 0:
-            seed = Entry("f", b"seed:", puts={item_key(i): b"item" for i in range(ITEMS)})
+            # Once only, also when a restarts before applying anything: SEEDED never written.
+            puts = {item_key(i): b"item" for i in range(ITEMS)} | {SEEDED: b""}
+            seed = Entry("f", b"seed:", puts=puts, guards={SEEDED: 0})
             while not await self.attempt(clog, "seed", seed):
+                if "WriteConflict" in self.last_error:
+                    break
                 await asyncio.sleep(0.2)
         quiet, stop = asyncio.Event(), asyncio.Event()
         asyncio.get_running_loop().add_signal_handler(signal.SIGUSR1, quiet.set)
@@ -148,5 +166,6 @@ class Node:
 
 
 if __name__ == "__main__":
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
     node = Node(sys.argv[1], Path(sys.argv[2]), sys.argv[3:])
     asyncio.run(node.run())
