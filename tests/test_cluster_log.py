@@ -216,6 +216,25 @@ def test_a_retried_transaction_is_logged_once(cluster):
     asyncio.run(main())
 
 
+def test_a_log_restarted_under_its_name_commits_its_first_changesets(cluster):
+    """The markers of a node's earlier life (leased 60 s) are not taken for its own."""
+
+    async def main() -> None:
+        client = EtcdClient(cluster.endpoints)
+        await client.open()
+        for life in (b"first life", b"second life"):
+            clog = ClusterLog(client, node="store-a")
+            await clog.start()
+            pos = await clog.append(Entry("s", life))
+            reply = await client.range(rpc.RangeRequest(key=log_key(ROOT, "s")))
+            assert msgpack.unpackb(reply.kvs[0].value) == [life]
+            assert reply.kvs[0].mod_revision == pos.revision
+            await clog.close()
+        await client.close()
+
+    asyncio.run(main())
+
+
 def test_a_replica_resumes_from_its_revision(cluster):
     async def main() -> None:
         client, clog = await _open(cluster.endpoints)
