@@ -21,28 +21,24 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import ClassVar
 
 import zenoh
-from rdflib import URIRef
 from rdflib.term import Node
 
-from agents.view import AC, RECORD_PREFIX, View
-from space import Change, SpaceError, SpaceTimeout, SpaceUnavailable, Subscription, TripleSpace
-from space.cli.options import add_connect
-from space.heap import freeze_startup
-from space.presence import declare_agent
+from agents.view import View
+from agents.vocabulary import RECORD_PREFIX, local_name, robot_iri
+from space import (
+    Change,
+    SpaceError,
+    SpaceTimeout,
+    SpaceUnavailable,
+    Subscription,
+    TripleSpace,
+    add_connect,
+    declare_agent,
+    freeze_startup,
+    identity_of,
+)
 
 Values = Mapping[tuple[Node, Node], Node | None]
-
-
-def robot_iri(text: str) -> URIRef:
-    """Return the IRI of a robot given as an IRI, `ac:name` or a bare local name."""
-    if "://" in text or text.startswith("urn:"):
-        return URIRef(text)
-    return AC[text.removeprefix("ac:")]
-
-
-def local_name(iri: URIRef) -> str:
-    """Return the part of an IRI after its last `#` or `/`."""
-    return str(iri).rsplit("#", 1)[-1].rsplit("/", 1)[-1]
 
 
 class SimClock:
@@ -95,8 +91,9 @@ class Agent:
         self.started = False
         self._token: zenoh.LivelinessToken | None = None
         self._subscription: Subscription | None = None
-        self._inbox: queue.SimpleQueue[Change | None] = queue.SimpleQueue()
+        self._inbox: queue.SimpleQueue[Change | Callable[[], None] | None] = queue.SimpleQueue()
         self._stop = threading.Event()
+        self._early: list[Callable[[], None]] = []
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -122,6 +119,7 @@ class Agent:
                         space=self.args.space,
                         agent=self.name,
                         config_file=self.args.config,
+                        identity=identity_of(self.args, self.name),
                     )
                     self._token = declare_agent(self.ts.session, self.ts.space, self.name)
                 self._subscription = self.subscribe()
@@ -179,6 +177,14 @@ class Agent:
         self._stop.set()
         self._inbox.put(None)
 
+    def call_soon(self, work: Callable[[], None]) -> None:
+        """Run `work` on the loop's thread soon, then tick; safe from any thread.
+
+        What a Zenoh callback must not do itself (write to the space, call a
+        service) it hands over so. Work before the view is rebuilt waits for it.
+        """
+        self._inbox.put(work)
+
     def shutdown(self) -> None:
         """Close the subscription, the liveliness token and the space, in that order."""
         try:
@@ -193,13 +199,21 @@ class Agent:
 
     # Handling
 
-    def _handle(self, change: Change) -> None:
+    def _handle(self, change: Change | Callable[[], None]) -> None:
+        if not isinstance(change, Change):
+            if self.started:
+                self._guarded(change, "work")
+            else:
+                self._early.append(change)
+            return
         if self.keeps_view:
-            self.view.apply(change)
+            self.view.apply(change, snapshot=not self.started)
         if not self.started:
             self.started = True
-            self.log.info("view rebuilt from the space: %d triples", len(self.view.graph))
+            self.log.info("view rebuilt from the space: %d triples", len(self.view))
             self._guarded(self.on_start, "start")
+            while self._early:
+                self._guarded(self._early.pop(0), "work")
         else:
             self._guarded(lambda: self.on_change(change), f"change {change.id}")
 

@@ -23,8 +23,8 @@ from rdflib import Literal, URIRef
 from rdflib.term import Node
 
 from agents.automaton import DOCKING_TIME, RETRY_AFTER, Plan, Situation, TaskAutomaton
-from agents.base import Agent, local_name, run_agent
-from agents.view import AC
+from agents.base import Agent, run_agent
+from agents.vocabulary import AC, local_name
 
 
 class Behavior(Agent):

@@ -25,9 +25,8 @@ from agents.base import Agent, run_agent
 from agents.behavior import Behavior
 from agents.hw_monitor import HwMonitor
 from agents.nav_monitor import NavMonitor
-from agents.view import AC
-from space import Change, TripleSpace
-from space.presence import declare_agent
+from agents.vocabulary import AC
+from space import Change, TripleSpace, declare_agent
 
 KINDS: dict[str, type[Agent]] = {
     "hw_monitor": HwMonitor,
@@ -101,7 +100,9 @@ class Crew(Agent):
         super().setup()
         assert self.ts is not None
         for member in self.members:
-            member.ts = TripleSpace(self.ts.session, self.ts.space, agent=member.name)
+            member.ts = TripleSpace(
+                self.ts.session, self.ts.space, agent=member.name, writer=self.ts.writer
+            )
             self._tokens.append(declare_agent(self.ts.session, self.ts.space, member.name))
         self.log.info("crew of %d agents for %d robots", len(self.members), len(self.robots))
 

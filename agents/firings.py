@@ -18,8 +18,8 @@ from datetime import UTC, datetime
 from rdflib import RDF, Graph, Literal, URIRef
 from rdflib.term import Node
 
-from agents.view import AC, RECORD_PREFIX
-from space.terms import Triple
+from agents.vocabulary import AC, RECORD_PREFIX
+from space import Triple
 
 FIRING_PREFIX = RECORD_PREFIX  # the subjects of firing records
 RULE_NAME = AC.rule_name

@@ -19,9 +19,9 @@ import sys
 import zenoh
 from rdflib import RDF, Literal, URIRef
 
-from agents.base import Agent, Values, local_name, run_agent
-from agents.view import AC
-from space.presence import alive_agents, watch_agents
+from agents.base import Agent, Values, run_agent
+from agents.vocabulary import AC, local_name
+from space import alive_agents, watch_agents
 
 PRESENT = Literal("present")
 GONE = Literal("gone")

@@ -21,13 +21,12 @@ from dataclasses import asdict
 from rdflib import RDF, RDFS, Literal, URIRef
 from rdflib.term import Node
 
-from agents.base import Agent, local_name, run_agent
+from agents.base import Agent, run_agent
 from agents.hmi_web.server import CommandError, Commands, HmiServer, StateBoard
+from agents.runtime.robotview import BadValues, read_firings, read_robots
 from agents.sim.battery import middle_of
-from agents.view import AC
-from space import Change
-from space.mirror import ChangeRecord
-from space.robotview import BadValues, read_firings, read_robots
+from agents.vocabulary import AC, local_name
+from space import Change, ChangeRecord
 
 TASK_TYPES = ("AttendingPatient", "Guiding", "GoingToDock", "Idle")
 

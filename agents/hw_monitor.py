@@ -20,7 +20,7 @@ from rdflib.term import Node
 from agents.base import Agent, run_agent
 from agents.sim.battery import CHARGE_RATE, DEFAULT_LEVELS, Battery, level_of, middle_of
 from agents.sim.devices import FAULTS, MODES, SWITCH_DELAY, Driver, drain, obstacles_seen
-from agents.view import AC
+from agents.vocabulary import AC
 from space import Change
 
 

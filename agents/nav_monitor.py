@@ -21,7 +21,7 @@ from rdflib.term import Node
 
 from agents.base import Agent, run_agent
 from agents.sim.base import DEFAULT_SPEEDS, Base, nearest
-from agents.view import AC
+from agents.vocabulary import AC
 
 POSITION_GRID = 0.5
 

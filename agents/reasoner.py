@@ -28,17 +28,23 @@ import zenoh
 from rdflib import OWL, RDF, URIRef
 from rdflib.term import Node
 
-from agents.base import Agent, local_name, run_agent
+from agents.base import Agent, run_agent
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
 from agents.ownership import PREFIX, Roster, concerned_robot
-from agents.view import AC
-from space import Change, SpaceError, Subscription
-from space.heap import refreeze
+from agents.resources import data_file
+from agents.vocabulary import AC, local_name
+from space import (
+    Change,
+    Pending,
+    SpaceError,
+    Subscription,
+    Triple,
+    refreeze,
+    replace_functional,
+    triple_to_nt,
+)
 from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
-from space.request import Pending
-from space.terms import Triple, triple_to_nt
 
-REPO = Path(__file__).resolve().parents[1]
 ONTOLOGY_IRI = URIRef("https://w3id.org/tspace/selfconfig")
 RELOAD_PERIOD = 1.0
 IN_FLIGHT = 64  # answers sent, not yet acknowledged, at most
@@ -108,12 +114,12 @@ class Reasoner(Agent):
     @property
     def rules_files(self) -> list[Path]:
         """Return the rules files given, or the default one."""
-        return self.args.rules or [REPO / "rules" / "selfconfig.rules"]
+        return self.args.rules or [data_file("rules/selfconfig.rules")]
 
     @property
     def ontology_files(self) -> list[Path]:
         """Return the ontology files given, or the default one."""
-        return self.args.ontology or [REPO / "ontology" / "selfconfig.ttl"]
+        return self.args.ontology or [data_file("ontology/selfconfig.ttl")]
 
     # Start
 
@@ -215,12 +221,14 @@ class Reasoner(Agent):
         The store replaces them too; doing it here keeps the engine's state the
         store's even when a writer did not say what it replaced.
         """
-        engine, out = self.engine, []
+        engine = self.engine
         assert engine is not None
-        for s, p, o in added:
-            if (p, RDF.type, OWL.FunctionalProperty) in engine:
-                out += [t for t in engine.match(s, p) if t[2] != o and t not in removed]
-        return out
+        change = replace_functional(
+            added,
+            lambda p: (p, RDF.type, OWL.FunctionalProperty) in engine,
+            lambda s, p: [t[2] for t in engine.match(s, p)],
+        )
+        return [t for t in change.replaced if t not in removed]
 
     def _write(
         self,

@@ -12,7 +12,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-from space import SpaceError, TripleSpace
+from space import SpaceError, TripleSpace, load_identity
 
 
 def free_port() -> int:
@@ -23,19 +23,34 @@ def free_port() -> int:
 
 
 @contextmanager
-def serve() -> Iterator[str]:
-    """Run `tspace serve` on a fresh data dir; yield its endpoint; stop it after."""
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
+def serve(secure: Path | None = None) -> Iterator[str]:
+    """Run `tspace serve` on a fresh data dir; yield its endpoint; stop it after.
+
+    With `secure` (a `tspace certs` directory), mutual TLS and the shipped policy.
+    """
+    endpoint = f"{'tls' if secure else 'tcp'}/127.0.0.1:{free_port()}"
+    identity = load_identity(secure, "operator") if secure else None
+    extra = ["--secure", str(secure)] if secure else []
     with tempfile.TemporaryDirectory() as data:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "space.cli", "serve", "--listen", endpoint, "--data", data],
+            [
+                sys.executable,
+                "-m",
+                "space.cli",
+                "serve",
+                "--listen",
+                endpoint,
+                "--data",
+                data,
+                *extra,
+            ],
             stderr=subprocess.DEVNULL,
         )
         try:
             deadline = time.monotonic() + 20
             while True:
                 try:
-                    with TripleSpace.open(endpoint, space="ping") as ts:
+                    with TripleSpace.open(endpoint, space="ping", identity=identity) as ts:
                         ts.snapshot(timeout=1)
                     break
                 except SpaceError:

@@ -1,6 +1,11 @@
-"""tspace: a distributed triple space on Eclipse Zenoh."""
+"""tspace: a distributed triple space on Eclipse Zenoh.
+
+This list is the library's API: an application (the robot's agents under
+`agents/`) imports from here and from `space.reasoning`, nothing deeper.
+"""
 
 from space.changeset import Changeset
+from space.cli.options import add_connect, identity_of
 from space.client import Transaction, TripleSpace
 from space.errors import (
     ChangesetRejected,
@@ -12,22 +17,68 @@ from space.errors import (
     SpaceUnavailable,
     TemplateError,
 )
+from space.functional import Replacement, declares_functional, replace_functional
+from space.heap import freeze_startup, refreeze
+from space.identity import Identity, load_identity
+from space.keys import ROOT as KEY_ROOT
+from space.keys import escape as escape_key_chunk
+from space.keys import unescape as unescape_key_chunk
+from space.mirror import ChangeRecord, SpaceMirror
+from space.paths import default_data_dir
+from space.ports import any_free_port
+from space.ports import probe as probe_port
+from space.prefixes import PrefixMap
+from space.presence import alive_agents, declare_agent, watch_agents
+from space.request import Pending
+from space.session import check_can_listen
 from space.subscription import Change, Subscription
 from space.template import Template
+from space.terms import Triple, triple_to_nt
+from space.turtle import read_turtle
+from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT, make_config
 
 __all__ = [
+    "DEFAULT_ENDPOINT",
+    "KEY_ROOT",
+    "SECURE_ENDPOINT",
     "Change",
+    "ChangeRecord",
     "Changeset",
     "ChangesetRejected",
+    "Identity",
     "InputError",
     "MalformedPayload",
+    "Pending",
+    "PrefixMap",
     "QueryError",
+    "Replacement",
     "SpaceError",
+    "SpaceMirror",
     "SpaceTimeout",
     "SpaceUnavailable",
     "Subscription",
     "Template",
     "TemplateError",
     "Transaction",
+    "Triple",
     "TripleSpace",
+    "add_connect",
+    "alive_agents",
+    "any_free_port",
+    "check_can_listen",
+    "declare_agent",
+    "declares_functional",
+    "default_data_dir",
+    "escape_key_chunk",
+    "freeze_startup",
+    "identity_of",
+    "load_identity",
+    "make_config",
+    "probe_port",
+    "read_turtle",
+    "refreeze",
+    "replace_functional",
+    "triple_to_nt",
+    "unescape_key_chunk",
+    "watch_agents",
 ]

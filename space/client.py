@@ -11,8 +11,9 @@ from __future__ import annotations
 import io
 import logging
 from collections.abc import Iterable, Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from types import TracebackType
+from typing import TYPE_CHECKING
 
 import zenoh
 from rdflib import Graph, URIRef
@@ -27,6 +28,9 @@ from space.session import open_session
 from space.subscription import Callback, Change, Dispatcher, Subscription
 from space.template import Template
 from space.terms import CACHED, Triple, triple_from_nt
+
+if TYPE_CHECKING:
+    from space.identity import Identity
 
 log = logging.getLogger("tspace.client")
 
@@ -49,10 +53,14 @@ class TripleSpace:
         *,
         agent: str | None = None,
         prefixes: dict[str, str] | None = None,
+        writer: str | None = None,
         _owns_session: bool = False,
     ) -> None:
         self.session = session
         self.space = keys.check_space(space)
+        # In a secure space a router lets each identity write (and take) only on
+        # keys that end with its own name, so the store knows who wrote.
+        self.writer = writer
         self.agent = agent or f"client-{session.zid()}"
         self.prefixes = PrefixMap(prefixes)
         self._owns_session = _owns_session
@@ -70,12 +78,14 @@ class TripleSpace:
         config_file: str | None = None,
         mode: str = "client",
         prefixes: dict[str, str] | None = None,
+        identity: Identity | None = None,
     ) -> TripleSpace:
         """Open a session to the routers at `connect` and a handle on `space`.
 
         Blocks until a router is reached. `prefixes` (name -> namespace IRI) are
         used in templates and sent with the changesets that use them, so the
-        space learns them too.
+        space learns them too. With `identity` (`space.load_identity`), every link is
+        mutual TLS with its certificate, and writes go under its name.
 
         Raises:
             InputError: `space` is not a legal space name (checked before connecting).
@@ -84,24 +94,32 @@ class TripleSpace:
         """
         keys.check_space(space)
         endpoints = [connect] if isinstance(connect, str) else connect
-        session = open_session(endpoints, mode=mode, config_file=config_file)
+        session = open_session(endpoints, mode=mode, config_file=config_file, identity=identity)
+        writer = identity.name if identity is not None else None
         try:
-            return cls(session, space, agent=agent, prefixes=prefixes, _owns_session=True)
+            return cls(
+                session, space, agent=agent, prefixes=prefixes, writer=writer, _owns_session=True
+            )
         except BaseException:
             session.close()
             raise
 
     def close(self) -> None:
-        """Undeclare every subscription and close the session if this handle opened it."""
-        for sub in list(self._subscriptions):
-            sub.close()
-        self._subscriptions.clear()
-        for watchdog in self._watchdogs:
-            watchdog.undeclare()
-        self._watchdogs = []
-        self._dispatcher.close()
-        if self._owns_session:
-            self.session.close()
+        """Undeclare every subscription and close the session if this handle opened it.
+
+        Each step runs even when an earlier one raised (its error is re-raised after):
+        a session left open keeps the process from exiting.
+        """
+        subscriptions, self._subscriptions = list(self._subscriptions), set()
+        watchdogs, self._watchdogs = self._watchdogs, []
+        with ExitStack() as steps:  # run in reverse: subscriptions first, the session last
+            if self._owns_session:
+                steps.callback(self.session.close)
+            steps.callback(self._dispatcher.close)
+            for watchdog in watchdogs:
+                steps.callback(watchdog.undeclare)
+            for sub in subscriptions:
+                steps.callback(sub.close)
 
     def __enter__(self) -> TripleSpace:
         return self
@@ -115,7 +133,10 @@ class TripleSpace:
         self.close()
 
     def _key(self, service: str) -> str:
-        return keys.service_key(self.space, service)
+        key = keys.service_key(self.space, service)
+        if self.writer is not None and service in ("write", "query"):
+            return f"{key}/{self.writer}"
+        return key
 
     # Writing
 

@@ -1,13 +1,9 @@
-"""Where tspace keeps its files by default, and where it finds the files it ships."""
+"""Where tspace keeps its files by default."""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
-
-# The package is installed editable: the shipped launch files, rules and ontology sit
-# beside it, in the project's folder.
-PROJECT = Path(__file__).resolve().parents[1]
 
 
 def default_data_dir() -> Path:
@@ -15,11 +11,3 @@ def default_data_dir() -> Path:
     base = os.environ.get("XDG_DATA_HOME") or Path.home() / ".local" / "share"
     return Path(base) / "tspace"
 
-
-def shipped(relative: str | Path) -> Path:
-    """Return `relative` in the current directory if it is there, else in the project's folder.
-
-    For defaults only: a file the user names is read where they said.
-    """
-    path = Path(relative)
-    return path if path.exists() else PROJECT / path

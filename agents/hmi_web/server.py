@@ -26,7 +26,7 @@ from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
 
-from space.errors import SpaceError
+from space import SpaceError
 
 KEEPALIVE = 15.0
 COMMAND_TIMEOUT = 10.0

@@ -5,15 +5,21 @@ its parser and sets `func` to a callable taking the parsed namespace and
 returning an exit code. `ORDER` (an int) places it in `tspace --help`.
 Sub-modules import their heavy dependencies inside that callable so that
 `tspace --help` stays fast.
+
+The library's own commands are the modules of this package; an application adds
+its commands (the robot's `tspace up`, `tspace agent`) as modules of the same
+shape, named by entry points in the `tspace.commands` group.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.metadata
 import logging
 import pkgutil
 import sys
+from types import ModuleType
 
 from space.errors import SpaceError, UsageError
 
@@ -33,10 +39,20 @@ def build_parser() -> argparse.ArgumentParser:
         for info in pkgutil.iter_modules(__path__)
         if not info.name.startswith("_")
     ]
+    modules += plugged_commands()
     commands = [m for m in modules if hasattr(m, "register")]
     for module in sorted(commands, key=lambda m: getattr(m, "ORDER", 100)):
         module.register(sub)
     return parser
+
+
+COMMANDS_GROUP = "tspace.commands"
+
+
+def plugged_commands() -> list[ModuleType]:
+    """Return the command modules other distributions plug in (`tspace.commands` entry points)."""
+    found = importlib.metadata.entry_points(group=COMMANDS_GROUP)
+    return [entry.load() for entry in sorted(found, key=lambda e: e.name)]
 
 
 def main(argv: list[str] | None = None) -> int:

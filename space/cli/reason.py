@@ -36,6 +36,7 @@ def run(args: argparse.Namespace) -> int:
     """Reason and print the state on stdout (Turtle) and the firings on stderr."""
     from rdflib import OWL, RDF, Graph
 
+    from space.functional import replace_functional
     from space.reasoning import Origin, RuleEngine, read_graph
 
     ontology = read_graph(args.ontology)
@@ -44,14 +45,10 @@ def run(args: argparse.Namespace) -> int:
     update, retract = read_graph(args.update), read_graph(args.retract)
     if len(update) or len(retract):
         functional = set(ontology.subjects(RDF.type, OWL.FunctionalProperty))
-        replaced = [
-            (s, p, old)
-            for s, p, o in update
-            if p in functional
-            for old in engine.graph.objects(s, p)
-            if old != o
-        ]
-        deltas.append(engine.apply(added=update, removed=[*retract, *replaced]))
+        change = replace_functional(
+            update, functional.__contains__, lambda s, p: engine.graph.objects(s, p)
+        )
+        deltas.append(engine.apply(added=change.kept, removed=[*retract, *change.replaced]))
     for delta in deltas:
         for firing in delta.firings:
             print(

@@ -7,7 +7,6 @@ which starts with the includer's prefixes.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from decimal import Decimal
@@ -22,10 +21,9 @@ from space.reasoning.builtins import Registry
 from space.reasoning.checks import check_names, check_rule, located
 from space.reasoning.errors import RuleError, RuleSyntaxError, unreadable
 from space.reasoning.rules import Call, Functor, Item, Location, Pattern, Rule, Term, Var
+from space.terms import unescape
 
 DEFAULT_PREFIXES = {"rdf": str(RDF), "rdfs": str(RDFS), "owl": str(OWL), "xsd": str(XSD)}
-_ESCAPE = re.compile(r"\\(u[0-9A-Fa-f]{4}|U[0-9A-Fa-f]{8}|.)")
-_SIMPLE = {"t": "\t", "n": "\n", "r": "\r", "b": "\b", "f": "\f"}
 
 
 @cache
@@ -183,7 +181,7 @@ class _RuleBuilder:
 
     def literal(self, node: Tree) -> Literal:
         text, suffix = node.children
-        value = _unescape(str(text)[1:-1])
+        value = unescape(str(text)[1:-1])
         if suffix is None:
             return Literal(value)
         if str(suffix).startswith("@"):
@@ -200,16 +198,6 @@ def _number(text: str) -> Literal:
     if "." in text:
         return Literal(Decimal(text))
     return Literal(int(text))
-
-
-def _unescape(text: str) -> str:
-    def one(match: re.Match[str]) -> str:
-        code = match.group(1)
-        if code[0] in "uU" and len(code) > 1:
-            return chr(int(code[1:], 16))
-        return _SIMPLE.get(code, code)
-
-    return _ESCAPE.sub(one, text) if "\\" in text else text
 
 
 def _syntax_message(exc: UnexpectedInput, text: str, source: str) -> str:

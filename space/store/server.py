@@ -27,6 +27,7 @@ from space.changeset import Changeset, pack, unpack
 from space.errors import MalformedPayload, QueryError, SpaceError
 from space.store.acks import AckGate
 from space.store.db import Commit, StoreDB
+from space.store.guard import WriteGuard, writer_of
 from space.store.queries import answer_key_get, answer_query
 from space.store.replica import Replica
 from space.store.roles import Roles
@@ -46,6 +47,7 @@ class _Request:
     payload: bytes | None
     query: zenoh.Query | None = None
     key: str = ""
+    writer: str | None = None  # the CN a secure router let write on this key
 
 
 class StoreServer:
@@ -64,8 +66,10 @@ class StoreServer:
         log_keep: int = 100_000,
         root: str = keys.ROOT,
         look_for_leader: float = 0.0,
+        guard: WriteGuard | None = None,
     ) -> None:
         self.session = session
+        self.guard = guard
         self.log_keep = log_keep
         self.data_dir = data_dir
         self.durable = durable
@@ -130,14 +134,16 @@ class StoreServer:
             key = str(query.key_expr)
             space = key.split("/")[1]
             payload = query.payload.to_bytes() if query.payload is not None else None
-            self._queue.put(_Request(kind, space, payload, query, key))
+            self._queue.put(_Request(kind, space, payload, query, key, writer_of(key)))
 
         return callback
 
     def _on_sample(self, kind: str) -> Callable[[zenoh.Sample], None]:
         def callback(sample: zenoh.Sample) -> None:
-            space = str(sample.key_expr).split("/")[1]
-            self._queue.put(_Request(kind, space, sample.payload.to_bytes()))
+            key = str(sample.key_expr)
+            space = key.split("/")[1]
+            payload = sample.payload.to_bytes()
+            self._queue.put(_Request(kind, space, payload, key=key, writer=writer_of(key)))
 
         return callback
 
@@ -202,6 +208,9 @@ class StoreServer:
                 self._reject(req, exc)
                 continue
             state = self._space(req.space)
+            if self.guard is not None and (why := self.guard.refusal(req.writer, state, cs)):
+                self._reject(req, QueryError(why))
+                continue
             if not cs.timestamp:
                 cs.timestamp = str(self.session.new_timestamp())
             result = state.apply(cs)
@@ -295,6 +304,10 @@ class StoreServer:
             return self._log(state, unpack(req.payload or b""))
         reply, take = answer_query(state, unpack(req.payload or b""))
         if take is not None and not take.is_empty():
+            if self.guard is not None and (
+                why := self.guard.refusal(req.writer, state, take, take=True)
+            ):
+                raise QueryError(why)
             result = state.apply(take)
             if result is not None:
                 self._flush([(_Request("write", req.space, None), result[0], state)], [result[1]])
@@ -368,6 +381,10 @@ class StoreServer:
             s.declare_queryable(f"{root}/*/@/write", on_query("write")),
             s.declare_subscriber(f"{root}/*/@/write", self._on_sample("write")),
             s.declare_queryable(f"{root}/*/@/query", on_query("query")),
+            # The same services, under the name of the writer (see space.store.guard).
+            s.declare_queryable(f"{root}/*/@/write/*", on_query("write")),
+            s.declare_subscriber(f"{root}/*/@/write/*", self._on_sample("write")),
+            s.declare_queryable(f"{root}/*/@/query/*", on_query("query")),
             s.declare_queryable(f"{root}/*/@/log", on_query("log")),
             s.declare_queryable(f"{root}/*/{keys.ASSERTED}/**", on_query("keys")),
             s.declare_queryable(f"{root}/*/{keys.INFERRED}/**", on_query("keys")),

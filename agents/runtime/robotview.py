@@ -11,15 +11,11 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
-from rdflib import RDF, BNode, Graph, Literal, Namespace, URIRef
+from rdflib import RDF, BNode, Graph, Literal, URIRef
 from rdflib.term import Node
 
-from space.mirror import ChangeRecord
-from space.prefixes import PrefixMap
-from space.terms import Triple
-
-AC = Namespace("https://w3id.org/tspace/selfconfig#")
-PREFIXES = PrefixMap({"ac": str(AC)})
+from agents.vocabulary import AC, FIRING_PROPERTIES, PREFIXES
+from space import ChangeRecord, Triple
 
 # Most specific first: a device is shown with the first of its classes listed here.
 DEVICE_CLASSES = (
@@ -31,7 +27,6 @@ DEVICE_CLASSES = (
     AC.Speaker,
     AC.Microphone,
 )
-FIRING_PROPERTIES = frozenset({AC.rule_name, AC.cause, AC.fired_at, AC.firing_seq, AC.robot})
 
 
 @dataclass(frozen=True)

@@ -16,8 +16,8 @@ from collections import deque
 from dataclasses import dataclass
 from typing import TextIO
 
-from space.robotview import Firing, RobotState
-from space.supervisor import ProcessStatus
+from agents.runtime.robotview import Firing, RobotState
+from agents.runtime.supervisor import ProcessStatus
 
 REDRAW_EVERY = 0.25
 

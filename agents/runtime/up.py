@@ -5,10 +5,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from space.zconfig import DEFAULT_ENDPOINT
+from space import DEFAULT_ENDPOINT, SECURE_ENDPOINT
 
 ORDER = 10
 DEFAULT_LAUNCH = Path("deploy/hospital.toml")
+POLICY = Path("deploy/policy.toml")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -54,29 +55,46 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="SECONDS",
         help="how long each scenario step may take (default 90)",
     )
+    p.add_argument(
+        "--secure",
+        metavar="DIR",
+        type=Path,
+        help="mutual TLS on every link, each process with its own certificate from DIR "
+        "(tspace certs init); the router enforces --policy",
+    )
+    p.add_argument(
+        "--policy",
+        metavar="FILE",
+        type=Path,
+        help=f"with --secure: who may do what (default {POLICY}, here or in the project's folder)",
+    )
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the deployment until Ctrl-C, SIGTERM, or the end of a `--once` scenario."""
-    from space.deployment import Deployment, Options
-    from space.errors import InputError
-    from space.launch import read_launch
-    from space.liveview import LiveView
-    from space.paths import default_data_dir, shipped
-    from space.scenario import SCENARIOS
+    from agents.resources import shipped
+    from agents.runtime.deployment import Deployment, Options
+    from agents.runtime.launch import read_launch
+    from agents.runtime.liveview import LiveView
+    from agents.runtime.scenario import SCENARIOS
+    from space import InputError, default_data_dir
 
+    if args.policy and not args.secure:
+        raise InputError("--policy needs --secure DIR")
     if args.once and not args.scenario:
         raise InputError("--once needs --scenario")
     if args.scenario and args.scenario not in SCENARIOS:
         raise InputError(f"unknown scenario {args.scenario!r}; known: {', '.join(SCENARIOS)}")
     options = Options(
         launch=read_launch(args.launch or shipped(DEFAULT_LAUNCH)),
-        listen=args.listen or [DEFAULT_ENDPOINT],
+        listen=args.listen or [SECURE_ENDPOINT if args.secure else DEFAULT_ENDPOINT],
         data=args.data or default_data_dir(),
         hmi_port=args.hmi_port,
         scenario=SCENARIOS[args.scenario] if args.scenario else None,
         once=args.once,
         step_timeout=args.step_timeout,
+        secure=args.secure,
+        policy=args.policy or (shipped(POLICY) if args.secure else None),
     )
     return Deployment(options, LiveView.for_terminal()).run()

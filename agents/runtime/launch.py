@@ -11,7 +11,7 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from space.errors import InputError
+from space import InputError
 
 
 @dataclass(frozen=True)

@@ -16,17 +16,20 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
 
-from space.client import TripleSpace
-from space.errors import SpaceError
-from space.hmiport import choose_port
-from space.launch import AgentSpec, Launch
-from space.liveview import Frame, LiveView, robot_line
-from space.mirror import SpaceMirror
-from space.robotview import BadValues, read_firings, read_robots
-from space.scenario import Scenario, ScenarioRun
-from space.session import check_can_listen
-from space.supervisor import ProcessSpec, Supervisor
-from space.turtle import read_turtle
+from agents.runtime.hmiport import choose_port
+from agents.runtime.launch import AgentSpec, Launch
+from agents.runtime.liveview import Frame, LiveView, robot_line
+from agents.runtime.robotview import BadValues, read_firings, read_robots
+from agents.runtime.scenario import Scenario, ScenarioRun
+from agents.runtime.supervisor import ProcessSpec, Supervisor
+from space import (
+    SpaceError,
+    SpaceMirror,
+    TripleSpace,
+    check_can_listen,
+    load_identity,
+    read_turtle,
+)
 
 STORE_STARTUP = 30.0
 TICK = 0.1
@@ -34,7 +37,7 @@ TICK = 0.1
 
 @dataclass(frozen=True)
 class Options:
-    """What `tspace up` was asked to run (see `space.cli.up`)."""
+    """What `tspace up` was asked to run (see `agents.runtime.up`)."""
 
     launch: Launch
     listen: list[str]
@@ -43,6 +46,8 @@ class Options:
     scenario: Scenario | None = None
     once: bool = False
     step_timeout: float = 90.0
+    secure: Path | None = None  # certificates: mutual TLS only, every process its identity
+    policy: Path | None = None
 
 
 def client_endpoint(listen: str) -> str:
@@ -81,6 +86,9 @@ class Deployment:
         self.scenario: ScenarioRun | None = None
         self.robot = launch.robots[0] if launch.robots else "robot1"
         self.hmi_port: int | None = None
+        self.operator = (
+            None if options.secure is None else load_identity(options.secure, "operator")
+        )
 
     def hmi_agent(self) -> AgentSpec | None:
         """Return the launch file's HMI agent, if it has one."""
@@ -90,6 +98,13 @@ class Deployment:
         """Return the command line of one agent process."""
         argv = [sys.executable, "-m", agent.module, "--connect", self.connect]
         argv += ["--space", self.launch.space]
+        if self.options.secure is not None:
+            # The identity `tspace certs init --fleet` made for it, KIND.ROBOT or KIND, is
+            # its name too: the routers let it declare a liveliness token under that name only.
+            kind = agent.name.split("/")[0]
+            identity = f"{kind}.{agent.robot}" if agent.robot else kind
+            argv += ["--secure", str(self.options.secure), "--identity", identity]
+            argv += ["--name", identity]
         if agent.robot:
             argv += ["--robot", agent.robot]
         args = list(agent.args)
@@ -123,6 +138,10 @@ class Deployment:
             serve = (sys.executable, "-m", "space.cli", "serve", "--data", str(self.options.data))
             for endpoint in self.options.listen:
                 serve += ("--listen", endpoint)
+            if self.options.secure is not None:
+                serve += ("--secure", str(self.options.secure))
+            if self.options.policy is not None:
+                serve += ("--policy", str(self.options.policy))
             self.supervisor.start(ProcessSpec("serve", serve, tier=0))
             ts = self._wait_for_store()
             if ts is None:
@@ -162,7 +181,12 @@ class Deployment:
             self.supervisor.poll()
             try:
                 if ts is None:
-                    ts = TripleSpace.open(self.connect, space=self.launch.space, agent="tspace-up")
+                    ts = TripleSpace.open(
+                        self.connect,
+                        space=self.launch.space,
+                        agent="tspace-up",
+                        identity=self.operator,
+                    )
                 ts.snapshot((None, None, None), timeout=1.0)
                 return ts
             except SpaceError as exc:
@@ -228,7 +252,7 @@ class Deployment:
             print(f"scenario {run.scenario.name}: completed", flush=True)
             return 0
         if run.failure is not None:
-            robots = read_robots(self.mirror.graph(), self.bad_values)
+            robots = read_robots(self.mirror.copy(), self.bad_values)
             state = "; ".join(robot_line(r) for r in robots) or "no robot in the space"
             print(
                 f"tspace up: scenario {run.scenario.name} failed: {run.failure} (now: {state})",
@@ -254,7 +278,7 @@ class Deployment:
             header += f", HMI {url}"
         return Frame(
             header=header,
-            robots=read_robots(self.mirror.graph(), self.bad_values),
+            robots=read_robots(self.mirror.copy(), self.bad_values),
             firings=read_firings(self.mirror.recent()),
             processes=self.supervisor.status(),
             footer=self.scenario.progress if self.scenario else "Ctrl-C stops everything.",

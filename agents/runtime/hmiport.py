@@ -9,18 +9,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from space.errors import InputError
-from space.launch import AgentSpec
-from space.ports import any_free_port, probe
+from agents.runtime.launch import AgentSpec
+from space import InputError, any_free_port, probe_port
 
 DEFAULT_PORT = 8080
 DEFAULT_HOST = "127.0.0.1"
 
 
 def port_free(host: str, port: int) -> bool:
-    """Return True if a server could listen on `host:port` now (see `ports.probe`)."""
+    """Return True if a server could listen on `host:port` now (see `space.probe_port`)."""
     try:
-        probe(host, port)
+        probe_port(host, port)
     except OSError:
         return False
     return True

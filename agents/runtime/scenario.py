@@ -16,11 +16,11 @@ from typing import TYPE_CHECKING
 
 from rdflib import Literal
 
-from space.robotview import AC, RobotState, battery_of, read_robots, task_named
+from agents.runtime.robotview import RobotState, battery_of, read_robots, task_named
+from agents.vocabulary import AC
 
 if TYPE_CHECKING:
-    from space import TripleSpace
-    from space.mirror import SpaceMirror
+    from space import SpaceMirror, TripleSpace
 
 STEP_TIMEOUT = 90.0
 INTERACTION = ("TouchScreen", "Speaker", "Microphone")
@@ -190,7 +190,7 @@ class ScenarioRun:
 
     def observe(self, mirror: SpaceMirror) -> None:
         """Advance past every step that the space's current state satisfies."""
-        robot = next((r for r in read_robots(mirror.graph()) if r.name == self.robot), None)
+        robot = next((r for r in read_robots(mirror.copy()) if r.name == self.robot), None)
         if robot is None:
             return
         with self._lock:
