@@ -10,4 +10,3 @@ def default_data_dir() -> Path:
     """Return `$XDG_DATA_HOME/tspace` (or `~/.local/share/tspace`)."""
     base = os.environ.get("XDG_DATA_HOME") or Path.home() / ".local" / "share"
     return Path(base) / "tspace"
-

@@ -52,6 +52,7 @@ class LogFleet:
             self.start_node(h)
         for h in NAMES:
             self.wait_acked(h, 30)
+            self.net.wait(lambda h=h: self.revision(h) > 0, 30, f"a replica applying on {h}")
 
     def start_etcd(self, host: str) -> None:
         """Start (or restart: etcd then ignores the initial-cluster flags) the member on `host`."""
@@ -123,8 +124,16 @@ class LogFleet:
             proc.popen.send_signal(signal.SIGUSR1)
         began = time.monotonic()
         time.sleep(0.6)  # writes in flight (0.5 s per attempt) settle into the log or fail
-        self.net.wait(lambda: len({self.revision(h) for h in NAMES}) == 1, 30, "identical replicas")
+        self.net.wait(self._caught_up, 30, "identical replicas")
         return time.monotonic() - began
+
+    def _caught_up(self) -> bool:
+        """Return True when every replica applied the last revision any replica logged.
+
+        (A re-listed replica may be past it: a re-list reads at the current revision.)
+        """
+        logged = [x["rev"] for h in NAMES for x in self.applied(h) if "payloads" in x]
+        return all(self.revision(h) >= max(logged, default=0) for h in NAMES)
 
     def stop(self) -> None:
         """End every node (after `quiesce`)."""

@@ -86,7 +86,11 @@ TRICKY = [
 
 def test_every_string_round_trips_through_the_term_codec():
     for text in TRICKY:
-        for term in (Literal(text), Literal(text, lang="fr"), Literal(text, datatype=URIRef("http://www.w3.org/2001/XMLSchema#token"))):
+        for term in (
+            Literal(text),
+            Literal(text, lang="fr"),
+            Literal(text, datatype=URIRef("http://www.w3.org/2001/XMLSchema#token")),
+        ):
             assert from_nt(to_nt(term)) == term
 
 

@@ -9,9 +9,10 @@ and when that revision is compacted away, or a watch answers with
 hands it to the replica, then watches from there.
 
 A live replica says which revision it applied under `replicas/` (leased:
-a replica gone for LIVENESS_TTL seconds stops counting), and every replica
-compacts etcd's history up to the lowest of those: etcd keeps a window of the
-log, the replicas' stores keep the history.
+a replica gone for LIVENESS_TTL seconds stops counting), before it applies
+anything and then every second, and every replica compacts etcd's history up
+to the lowest of those: etcd keeps a window of the log, the replicas' stores
+keep the history.
 """
 
 from __future__ import annotations
@@ -92,6 +93,7 @@ class Applier:
         self._apply = apply
         self._relist = relist
         self._advanced = asyncio.Condition()
+        self._registered = asyncio.Event()
         self._tasks: list[asyncio.Task[None]] = []
         self.relists = 0
 
@@ -127,6 +129,8 @@ class Applier:
             self._advanced.notify_all()
 
     async def _follow(self) -> None:
+        # Registered first: compaction never passes a replica that applied something.
+        await self._registered.wait()
         pause = 0.05
         while True:
             try:
@@ -214,7 +218,8 @@ class Applier:
         lease, granted, reported = 0, 0.0, -1
         loop = asyncio.get_running_loop()
         while True:
-            await asyncio.sleep(REPORT_EVERY)
+            if self._registered.is_set():
+                await asyncio.sleep(REPORT_EVERY)
             try:
                 if not lease or loop.time() - granted > LIVENESS_TTL / 2:
                     lease = await self.client.grant(LIVENESS_TTL)
@@ -227,9 +232,12 @@ class Applier:
                     )
                     await self.client.txn(rpc.TxnRequest(success=[rpc.RequestOp(request_put=put)]))
                     reported = self.revision
+                    self._registered.set()
             except (NoQuorum, ClusterError) as error:
-                log.debug("cannot report revision %d: %s", self.revision, error)
+                log.info("cannot report revision %d: %s", self.revision, error)
                 lease = 0
+                if not self._registered.is_set():
+                    await asyncio.sleep(REPORT_EVERY)
 
     async def _compact(self) -> None:
         compacted = 0
@@ -238,7 +246,7 @@ class Applier:
             try:
                 done = await compact_behind_replicas(self.client, self.root, compacted)
                 if done != compacted:
-                    log.info("compacted etcd's history up to revision %d", done)
+                    log.info("compacted etcd's history up to revision %d (%s)", done, self.node)
                 compacted = done
             except (NoQuorum, ClusterError) as error:
                 log.debug("cannot compact: %s", error)
@@ -248,11 +256,12 @@ async def compact_behind_replicas(client: EtcdClient, root: bytes, compacted: in
     """Compact etcd's history up to what every live replica applied; return that revision."""
     prefix = root + b"replicas/"
     reply = await client.range(rpc.RangeRequest(key=prefix, range_end=prefix_end(prefix)))
-    applied = [int(kv.value) for kv in reply.kvs]
-    if not applied or min(applied) <= compacted:
+    applied = {kv.key[len(prefix) :].decode(): int(kv.value) for kv in reply.kvs}
+    if not applied or min(applied.values()) <= compacted:
         return compacted
-    await client.compact(min(applied))
-    return min(applied)
+    log.debug("replicas at %s: compacting", applied)
+    await client.compact(min(applied.values()))
+    return min(applied.values())
 
 
 class _Broken(Exception):
