@@ -19,7 +19,7 @@ from __future__ import annotations
 import asyncio
 import logging
 from collections.abc import AsyncIterator, Awaitable, Callable, Sequence
-from typing import Any, TypeVar
+from typing import TypeVar
 
 import grpc
 from aetcd import rpc
@@ -207,7 +207,3 @@ class EtcdClient:
                         ) from error
                 await asyncio.sleep(min(0.05 * failures, 0.2))
 
-
-def kv_pairs(response: Any) -> list[tuple[bytes, bytes]]:
-    """Return a range response's `(key, value)` pairs."""
-    return [(kv.key, kv.value) for kv in response.kvs]
