@@ -7,8 +7,8 @@ deployments can share an etcd cluster and one range covers each kind:
     ROOT state/SPACE/G/ID     one triple of graph G (t asserted, i inferred), value its text
     ROOT fn/SPACE/ID          the value and HLC stamp of one (subject, functional property)
     ROOT prefix/SPACE/NAME    a prefix binding of SPACE
-    ROOT count/SPACE/I        put once by every transaction with more than I changesets of
-                              SPACE: the sum of their versions is the space's sequence number
+    ROOT count/SPACE/J        put by every transaction whose number of changesets of SPACE
+                              has bit J set: the sum of version x 2**J is the space's seq
     ROOT batch/NODE-ID-N      marks a committed group-commit transaction (leased, 60 s);
                               ID is new in every process, so a marker never repeats
     ROOT replicas/NODE        the revision a live replica has applied (leased)
@@ -71,9 +71,16 @@ def replica_key(root: bytes, node: str) -> bytes:
     return root + b"replicas/" + node.encode()
 
 
-def count_key(root: bytes, space: str, i: int) -> bytes:
-    """Return the I-th counter key of SPACE (see the module's docstring)."""
-    return root + b"count/" + space.encode() + b"/%d" % i
+def count_keys(root: bytes, space: str, n: int) -> list[bytes]:
+    """Return the counter keys a transaction with `n` changesets of SPACE puts (one per bit)."""
+    return [
+        root + b"count/" + space.encode() + b"/%d" % j for j in range(n.bit_length()) if n >> j & 1
+    ]
+
+
+def count_weight(key: bytes) -> int:
+    """Return how many changesets one put of a counter key stands for (2**J)."""
+    return 1 << int(key.rsplit(b"/", 1)[1])
 
 
 def prefix_key(root: bytes, space: str, name: str) -> bytes:

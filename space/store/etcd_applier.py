@@ -27,7 +27,7 @@ import msgpack
 from aetcd import rpc
 
 from space.errors import ClusterError, NoQuorum
-from space.store.cluster_keys import ROOT, log_space, prefix_end, replica_key
+from space.store.cluster_keys import ROOT, count_weight, log_space, prefix_end, replica_key
 from space.store.etcd_client import EtcdClient
 
 log = logging.getLogger("tspace.etcd")
@@ -204,7 +204,7 @@ class Applier:
                 for kv in reply.kvs:
                     if prefix == counts:
                         space = kv.key[len(counts) :].rsplit(b"/", 1)[0].decode()
-                        seqs[space] = seqs.get(space, 0) + kv.version
+                        seqs[space] = seqs.get(space, 0) + kv.version * count_weight(kv.key)
                     else:
                         pairs.append((kv.key, kv.value))
                 if not reply.more:

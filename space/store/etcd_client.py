@@ -206,4 +206,3 @@ class EtcdClient:
                             f"no leader elected within {self.deadline:g} s",
                         ) from error
                 await asyncio.sleep(min(0.05 * failures, 0.2))
-

@@ -38,7 +38,7 @@ import msgpack
 from aetcd import rpc
 
 from space.errors import ClusterError, WriteConflict
-from space.store.cluster_keys import ROOT, batch_key, count_key, log_key
+from space.store.cluster_keys import ROOT, batch_key, count_keys, log_key
 from space.store.etcd_client import EtcdClient
 
 log = logging.getLogger("tspace.etcd")
@@ -69,7 +69,7 @@ class Entry:
 
     def ops(self) -> int:
         """Return how many transaction operations this entry costs."""
-        return 2 + len(self.puts) + len(self.deletes) + len(self.guards) + len(self.present)
+        return 1 + len(self.puts) + len(self.deletes) + len(self.guards) + len(self.present)
 
     def size(self) -> int:
         """Return roughly how many bytes this entry adds to a transaction."""
@@ -291,7 +291,7 @@ class ClusterLog:
             guarded.setdefault(key, 0)
         for space, payloads in logs.items():
             success.append(_put(log_key(self.root, space), msgpack.packb(payloads)))
-            success += [_put(count_key(self.root, space, i), b"") for i in range(len(payloads))]
+            success += [_put(k, b"") for k in count_keys(self.root, space, len(payloads))]
         success.append(_put(marker, b"", lease=await self._marker_lease()))
         failure = [_get(marker)] + [_get(key) for key in guarded]
         return rpc.TxnRequest(compare=compare, success=success, failure=failure)
