@@ -31,9 +31,9 @@ from pathlib import Path
 from _harness import OUT, median, percentile, print_table
 from aetcd import rpc
 
-from space.errors import NoQuorum
+from space.errors import NoQuorum, WriteConflict
 from space.store.cluster_entries import Decision, entry_for
-from space.store.cluster_keys import ROOT
+from space.store.cluster_keys import ROOT, functional_key
 from space.store.etcd_client import EtcdClient
 from space.store.etcd_log import ClusterLog, Entry
 from space.store.etcd_member import LocalCluster
@@ -48,6 +48,7 @@ class Robot:
     def __init__(self, n: int) -> None:
         self.s = f"<http://ex.org/robot{n}-{uuid.uuid4().hex[:8]}>"  # new in every run
         self.p = "<https://w3id.org/tspace/selfconfig#batteryLevel>"
+        self.fn = functional_key(ROOT, "bench", self.s, self.p)
         self.read = 0  # the revision this robot's last write committed at: its replica's view
         self.old: tuple[str, str, str] | None = None
         self.level = 0
@@ -79,6 +80,12 @@ async def write_loop(clog: ClusterLog, robot: Robot, stop: float, acks: list[tup
             pos = await clog.append(robot.entry())
         except NoQuorum:
             continue  # during a failover: the write was not acknowledged, send the next
+        except WriteConflict:
+            # An earlier write refused with NoQuorum had committed after all: read again,
+            # as the store's replica would (its state then has that write).
+            reply = await clog.client.range(rpc.RangeRequest(key=robot.fn))
+            robot.read = reply.kvs[0].mod_revision if reply.kvs else 0
+            continue
         robot.read = pos.revision
         acks.append((sent, loop.time()))
 
