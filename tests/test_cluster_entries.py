@@ -112,3 +112,28 @@ def test_a_relisted_state_is_what_the_decisions_made(etcd_cluster):
         await client.close()
 
     asyncio.run(main())
+
+
+def test_one_request_decided_on_two_replicas_is_committed_once(etcd_cluster):
+    """A writer's retry reached another replica before that one applied the first attempt."""
+
+    async def main() -> None:
+        a_client, a = await _log(etcd_cluster.endpoints)
+        b_client, b = await _log(etcd_cluster.endpoints[::-1])
+
+        def attempt(payload: bytes) -> Decision:
+            return Decision("s", payload, 0, "0001", added=[(R1, "<p>", "<o>")], request="req-42")
+
+        results = await asyncio.gather(
+            a.append(entry_for(ROOT, attempt(b"first"))),
+            b.append(entry_for(ROOT, attempt(b"retry"))),
+            return_exceptions=True,
+        )
+        assert sum(isinstance(r, WriteConflict) for r in results) == 1, results
+        other = await a.append(entry_for(ROOT, Decision("s", b"other", 0, request="req-43")))
+        assert other.revision > 0
+        for c, clog in ((a_client, a), (b_client, b)):
+            await clog.close()
+            await c.close()
+
+    asyncio.run(main())

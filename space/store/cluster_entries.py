@@ -19,7 +19,13 @@ from dataclasses import dataclass, field
 
 import msgpack
 
-from space.store.cluster_keys import functional_key, prefix_key, state_prefix, triple_key
+from space.store.cluster_keys import (
+    functional_key,
+    prefix_key,
+    request_key,
+    state_prefix,
+    triple_key,
+)
 from space.store.etcd_log import Entry
 
 Text = tuple[str, str, str]  # (s, p, o) as N-Triples terms
@@ -41,6 +47,7 @@ class Decision:
     replaced: list[tuple[str, str]] = field(default_factory=list)  # functional (s, p) written
     taken: list[Text] = field(default_factory=list)  # removed by a take
     prefixes: dict[str, str] = field(default_factory=dict)  # bindings new in this changeset
+    request: str = ""  # the writer's request id: committed once, whichever replica decides
 
 
 def line(t: Text) -> str:
@@ -68,6 +75,10 @@ def entry_for(root: bytes, d: Decision) -> Entry:
         entry.puts[key] = value
     for t in d.inferred_added:
         entry.puts[triple_key(root, d.space, "i", *t)] = line(t).encode()
+    if d.request:
+        key = request_key(root, d.space, d.request)
+        entry.guards[key] = 0  # absent: no replica committed this request in the last minute
+        entry.leased.append(key)
     for name, iri in d.prefixes.items():
         entry.puts[prefix_key(root, d.space, name)] = iri.encode()
     entry.deletes = [k for k in entry.deletes if k not in entry.puts]

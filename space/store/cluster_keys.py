@@ -9,6 +9,7 @@ deployments can share an etcd cluster and one range covers each kind:
     ROOT prefix/SPACE/NAME    a prefix binding of SPACE
     ROOT count/SPACE/J        put by every transaction whose number of changesets of SPACE
                               has bit J set: the sum of version x 2**J is the space's seq
+    ROOT req/SPACE/ID         a request id seen in the last minute (leased, 60 s)
     ROOT batch/NODE-ID-N      marks a committed group-commit transaction (leased, 60 s);
                               ID is new in every process, so a marker never repeats
     ROOT replicas/NODE        the revision a live replica has applied (leased)
@@ -86,3 +87,8 @@ def count_weight(key: bytes) -> int:
 def prefix_key(root: bytes, space: str, name: str) -> bytes:
     """Return the key of prefix `name` of SPACE."""
     return root + b"prefix/" + space.encode() + b"/" + name.encode()
+
+
+def request_key(root: bytes, space: str, request: str) -> bytes:
+    """Return the key that says request `request` of SPACE was committed lately."""
+    return root + b"req/" + space.encode() + b"/" + digest(request).encode()

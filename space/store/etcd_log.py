@@ -66,10 +66,12 @@ class Entry:
     deletes: list[bytes] = field(default_factory=list)
     guards: dict[bytes, int] = field(default_factory=dict)  # key -> unchanged since this revision
     present: list[bytes] = field(default_factory=list)  # guarded keys that must also exist
+    leased: list[bytes] = field(default_factory=list)  # empty keys put with a 60 s lease
 
     def ops(self) -> int:
         """Return how many transaction operations this entry costs."""
-        return 1 + len(self.puts) + len(self.deletes) + len(self.guards) + len(self.present)
+        puts = len(self.puts) + len(self.leased)
+        return 1 + puts + len(self.deletes) + len(self.guards) + len(self.present)
 
     def size(self) -> int:
         """Return roughly how many bytes this entry adds to a transaction."""
@@ -185,7 +187,7 @@ class ClusterLog:
         ops = size = 0
         for item in self._queue:
             entry = item[0]
-            writes = {*entry.puts, *entry.deletes}
+            writes = {*entry.puts, *entry.deletes, *entry.leased}
             guards = {*entry.guards, *entry.present}
             full = batch and (
                 len(batch) >= self.batch
@@ -275,6 +277,11 @@ class ClusterLog:
             for key, value in entry.puts.items():
                 writes.pop(key, None)
                 writes[key] = _put(key, value)
+        lease = await self._marker_lease()
+        for entry, _ in batch:
+            for key in entry.leased:
+                writes.pop(key, None)
+                writes[key] = _put(key, b"", lease=lease)
         success = list(writes.values())
         for key, since in guarded.items():
             compare.append(
@@ -292,7 +299,7 @@ class ClusterLog:
         for space, payloads in logs.items():
             success.append(_put(log_key(self.root, space), msgpack.packb(payloads)))
             success += [_put(k, b"") for k in count_keys(self.root, space, len(payloads))]
-        success.append(_put(marker, b"", lease=await self._marker_lease()))
+        success.append(_put(marker, b"", lease=lease))
         failure = [_get(marker)] + [_get(key) for key in guarded]
         return rpc.TxnRequest(compare=compare, success=success, failure=failure)
 
