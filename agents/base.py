@@ -25,6 +25,7 @@ from rdflib.term import Node
 
 from agents.view import View
 from agents.vocabulary import RECORD_PREFIX, local_name, robot_iri
+from agents.writes import Writes
 from space import (
     Change,
     SpaceError,
@@ -87,6 +88,7 @@ class Agent:
         self.log = logging.getLogger(self.name)
         self.clock = SimClock(args.time_scale)
         self.view = View()
+        self.writes = Writes()
         self.ts: TripleSpace | None = None
         self.started = False
         self._token: zenoh.LivelinessToken | None = None
@@ -166,6 +168,7 @@ class Agent:
                     change = self._inbox.get_nowait()
                 except queue.Empty:
                     change = None
+            self._surface_failed_writes()
             if self.started and (changed or time.monotonic() >= next_tick):
                 self._guarded(self.tick, "tick")
                 next_tick = time.monotonic() + self.args.tick
@@ -186,8 +189,9 @@ class Agent:
         self._inbox.put(work)
 
     def shutdown(self) -> None:
-        """Close the subscription, the liveliness token and the space, in that order."""
+        """Settle the writes in flight, close the subscription, the token and the space."""
         try:
+            self.writes.close(self.args.timeout)
             if self._subscription is not None:
                 self._subscription.close()
             if self._token is not None:
@@ -228,15 +232,20 @@ class Agent:
 
     # Writing
 
-    def set_values(self, values: Values, *, cause: str | None = None) -> str | None:
+    def set_values(
+        self, values: Values, *, cause: str | None = None, wait: bool = False
+    ) -> str | None:
         """Write single-valued states as one changeset; return its id, None if nothing changed.
 
         `values` maps (subject, predicate) to the new object (None removes the
-        state). The view is updated at once so the next tick sees it. Blocks
-        until the store made the change durable.
+        state). The view is updated at once so the next tick sees it. Returns as
+        soon as the changeset is sent: its acknowledgement is read off the loop,
+        and a write the store did not take is undone in the view and logged
+        (`_surface_failed_writes`). With `wait` (a person waiting for the answer,
+        as the HMI's commands), blocks until the store made it durable instead.
 
         Raises:
-            SpaceError: the store did not take it (the view is left as it was).
+            SpaceError: with `wait`, the store did not take it (the view is left as it was).
         """
         assert self.ts is not None
         added, removed = [], []
@@ -251,12 +260,26 @@ class Agent:
             return None
         self.view.remove(removed)
         self.view.add(added)
+        cs = self.ts.changeset(added, removed, cause=cause)
+        if not wait:
+            self.writes.track(
+                cs.id, self.ts.send_later(cs, timeout=self.args.timeout), added, removed
+            )
+            return cs.id
         try:
-            return self.ts.apply(added, removed, cause=cause, timeout=self.args.timeout)
+            return self.ts.send(cs, timeout=self.args.timeout)
         except SpaceError:
             self.view.remove(added)
             self.view.add(removed)
             raise
+
+    def _surface_failed_writes(self) -> None:
+        """Undo in the view, and log, each write the store did not take (the loop's thread)."""
+        for failed in self.writes.failed():
+            self.log.warning("write %s not taken, undone in the view: %s", failed.id, failed.error)
+            if all(t in self.view.graph for t in failed.added):
+                self.view.remove(failed.added)
+                self.view.add(failed.removed)
 
     # Hooks
 
@@ -270,10 +293,13 @@ class Agent:
         """Advance simulations and controllers; called every `--tick` seconds. Never blocks long."""
 
 
-def build_parser(cls: type[Agent]) -> argparse.ArgumentParser:
-    """Return the command-line parser of an agent class: common options, then its own."""
+def build_parser(cls: type[Agent], prog: str | None = None) -> argparse.ArgumentParser:
+    """Return the command-line parser of an agent class: common options, then its own.
+
+    `prog` is how the agent was run, for its usage line (`python -m agents.KIND` by default).
+    """
     parser = argparse.ArgumentParser(
-        prog=f"python -m agents.{cls.kind}", description=(cls.__doc__ or "").split("\n")[0]
+        prog=prog or f"python -m agents.{cls.kind}", description=(cls.__doc__ or "").split("\n")[0]
     )
     add_connect(parser)
     parser.add_argument(
@@ -302,9 +328,9 @@ def build_parser(cls: type[Agent]) -> argparse.ArgumentParser:
     return parser
 
 
-def run_agent(cls: type[Agent], argv: Sequence[str] | None = None) -> int:
-    """Run an agent until SIGINT or SIGTERM; return the process exit code."""
-    args = build_parser(cls).parse_args(argv)
+def run_agent(cls: type[Agent], argv: Sequence[str] | None = None, prog: str | None = None) -> int:
+    """Run an agent until SIGINT or SIGTERM; return the exit code (`prog`: see `build_parser`)."""
+    args = build_parser(cls, prog).parse_args(argv)
     logging.basicConfig(
         stream=sys.stderr,
         level=[logging.INFO, logging.DEBUG][min(args.verbose, 1)],

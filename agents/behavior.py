@@ -169,9 +169,9 @@ def _name(node: Node | None) -> str | None:
     return None if node is None else str(node)
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run the behaviour machine (see `--help`)."""
-    return run_agent(Behavior, argv)
+    return run_agent(Behavior, argv, prog)
 
 
 if __name__ == "__main__":

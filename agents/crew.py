@@ -67,6 +67,7 @@ class Crew(Agent):
         ]
         for member in self.members:
             member.view = self.view  # one view for all: the space is the same
+            member.writes = self.writes  # one thread settles all their writes
         self._tokens: list[zenoh.LivelinessToken] = []
         self._touched: set[Node] = set()
         self._full_tick_at = 0.0
@@ -163,9 +164,9 @@ class Crew(Agent):
         self._touched.clear()
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run a crew (see `--help`)."""
-    return run_agent(Crew, argv)
+    return run_agent(Crew, argv, prog)
 
 
 if __name__ == "__main__":

@@ -106,9 +106,9 @@ class FleetMonitor(Agent):
             self.set_values(values)
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run the fleet monitor (see `--help`)."""
-    return run_agent(FleetMonitor, argv)
+    return run_agent(FleetMonitor, argv, prog)
 
 
 if __name__ == "__main__":

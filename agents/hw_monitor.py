@@ -197,9 +197,9 @@ class HwMonitor(Agent):
         return values
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run the hardware monitor (see `--help`)."""
-    return run_agent(HwMonitor, argv)
+    return run_agent(HwMonitor, argv, prog)
 
 
 if __name__ == "__main__":

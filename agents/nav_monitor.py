@@ -136,9 +136,9 @@ class NavMonitor(Agent):
         return values
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run the navigation monitor (see `--help`)."""
-    return run_agent(NavMonitor, argv)
+    return run_agent(NavMonitor, argv, prog)
 
 
 if __name__ == "__main__":

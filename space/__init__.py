@@ -4,6 +4,11 @@ This list is the library's API: an application (the robot's agents under
 `agents/`) imports from here and from `space.reasoning`, nothing deeper.
 """
 
+from space._display import triple_text
+from space._paths import default_data_dir
+from space._ports import any_free_port
+from space._ports import probe as probe_port
+from space._turtle import read_turtle
 from space.changeset import Changeset
 from space.cli.options import add_connect, identity_of
 from space.client import Transaction, TripleSpace
@@ -11,12 +16,14 @@ from space.errors import (
     ChangesetRejected,
     InputError,
     MalformedPayload,
+    NoReasoner,
     QueryError,
     SpaceError,
     SpaceTimeout,
     SpaceUnavailable,
     TemplateError,
 )
+from space.explanation import Explanation, Written
 from space.functional import Replacement, declares_functional, replace_functional
 from space.heap import freeze_startup, refreeze
 from space.identity import Identity, load_identity
@@ -24,17 +31,14 @@ from space.keys import ROOT as KEY_ROOT
 from space.keys import escape as escape_key_chunk
 from space.keys import unescape as unescape_key_chunk
 from space.mirror import ChangeRecord, SpaceMirror
-from space.paths import default_data_dir
-from space.ports import any_free_port
-from space.ports import probe as probe_port
 from space.prefixes import PrefixMap
 from space.presence import alive_agents, declare_agent, watch_agents
 from space.request import Pending
 from space.session import check_can_listen
 from space.subscription import Change, Subscription
 from space.template import Template
-from space.terms import Triple, triple_to_nt
-from space.turtle import read_turtle
+from space.terms import Triple, from_nt, triple_to_nt
+from space.why import WhyService
 from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT, make_config
 
 __all__ = [
@@ -45,9 +49,11 @@ __all__ = [
     "ChangeRecord",
     "Changeset",
     "ChangesetRejected",
+    "Explanation",
     "Identity",
     "InputError",
     "MalformedPayload",
+    "NoReasoner",
     "Pending",
     "PrefixMap",
     "QueryError",
@@ -62,6 +68,8 @@ __all__ = [
     "Transaction",
     "Triple",
     "TripleSpace",
+    "WhyService",
+    "Written",
     "add_connect",
     "alive_agents",
     "any_free_port",
@@ -71,6 +79,7 @@ __all__ = [
     "default_data_dir",
     "escape_key_chunk",
     "freeze_startup",
+    "from_nt",
     "identity_of",
     "load_identity",
     "make_config",
@@ -78,6 +87,7 @@ __all__ = [
     "read_turtle",
     "refreeze",
     "replace_functional",
+    "triple_text",
     "triple_to_nt",
     "unescape_key_chunk",
     "watch_agents",

@@ -113,13 +113,19 @@ def _build(data: dict) -> Policy:
     if reasoners.get("per_robot", False):
         give([f"reasoner.{r}" for r in robots], Role.REASONER, "reasoners")
     agents = _table(data, "robot_agents")
-    namespace = expand(str(agents.get("namespace", "ac:")), "robot_agents.namespace")
+    kinds = _strings(agents.get("kinds", []), "robot_agents.kinds")
+    per_robot_routers = _table(data, "robot_routers").get("per_robot", False)
+    namespace = ""
+    if kinds or per_robot_routers:  # a robot's IRI is the namespace and its name
+        if "namespace" not in agents:
+            raise InputError('robot_agents.namespace: the namespace of robots\' IRIs ("ac:")')
+        namespace = expand(str(agents["namespace"]), "robot_agents.namespace")
     robot_of: dict[str, URIRef] = {}
-    for kind in _strings(agents.get("kinds", []), "robot_agents.kinds"):
+    for kind in kinds:
         for robot in robots:
             robot_of[f"{kind}.{robot}"] = URIRef(f"{namespace}{robot}")
     give(robot_of, Role.ROBOT_AGENT, "robot_agents")
-    if _table(data, "robot_routers").get("per_robot", False):
+    if per_robot_routers:
         routers = {f"router.{r}": URIRef(f"{namespace}{r}") for r in robots}
         give(routers, Role.ROBOT_ROUTER, "robot_routers")
         robot_of.update(routers)

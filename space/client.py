@@ -21,7 +21,15 @@ from rdflib.query import Result
 
 from space import keys
 from space.changeset import Changeset, pack, unpack
-from space.errors import MalformedPayload, QueryError, TemplateError
+from space.errors import (
+    MalformedPayload,
+    NoReasoner,
+    QueryError,
+    SpaceTimeout,
+    SpaceUnavailable,
+    TemplateError,
+)
+from space.explanation import Explanation
 from space.prefixes import PrefixMap
 from space.request import Pending, ask_store
 from space.session import open_session
@@ -329,6 +337,64 @@ class TripleSpace:
             return Result.parse(io.BytesIO(body), format="json")
         except ValueError as exc:
             raise QueryError(f"unreadable SPARQL result: {exc}") from exc
+
+    def seq(self, *, timeout: float = 5.0) -> int:
+        """Return the space's sequence number now (how many changesets it has applied).
+
+        Raises:
+            SpaceUnavailable, SpaceTimeout: as `query`.
+        """
+        return self._seq(timeout)
+
+    def history(
+        self, first: int = 1, last: int = 0, *, timeout: float = 5.0
+    ) -> tuple[list[Changeset], int]:
+        """Return the changesets `first..last` the store's log still keeps, oldest first.
+
+        `last` 0 means up to the newest. Also returns the space's sequence number
+        now. The store keeps a bounded log (`tspace serve --log-keep`): older
+        changesets are gone and simply missing from the answer.
+
+        Raises:
+            SpaceUnavailable, SpaceTimeout: as `query`.
+            MalformedPayload: the store sent a changeset that cannot be read.
+        """
+        request = {"from": max(1, first)}
+        if last:
+            request["to"] = last
+        key = self._key("log")
+        reply = ask_store(self.session, key, pack(request), timeout, what="log request")
+        changes = [Changeset.decode(bytes(p), published=True) for p in reply.get("changes") or ()]
+        return changes, int(reply.get("seq") or 0)
+
+    def why(
+        self, template: TemplateLike = None, *, limit: int = 20, timeout: float = 5.0
+    ) -> list[Explanation]:
+        """Return why each triple matching `template` holds (at most `limit` of them).
+
+        The space's reasoner answers (on `@/why`, see docs/wire-format.md): for
+        each matching triple, the rule that concluded it with the comment above
+        the rule in its file, the facts the rule matched, explained in turn, down
+        to what agents wrote, with who wrote it and when. A triple that does not
+        hold has no explanation: no match gives an empty list.
+
+        Raises:
+            NoReasoner: no reasoner answered within `timeout`.
+            QueryError: the reasoner refused the request.
+        """
+        t = self._template(template)
+        request = {"template": t.to_wire(), "limit": int(limit)}
+        try:
+            reply = ask_store(self.session, self._key("why"), pack(request), timeout, what="why")
+        except (SpaceUnavailable, SpaceTimeout) as exc:
+            raise NoReasoner(
+                f"no reasoner answered on space {self.space!r} within {timeout:g} s "
+                "(is one running? `tspace up` starts one)"
+            ) from exc
+        found = reply.get("explanations") or []
+        if not isinstance(found, list):
+            raise MalformedPayload("the reasoner's 'explanations' is not a list")
+        return [Explanation.from_wire(w) for w in found]
 
     # Watching
 

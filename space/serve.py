@@ -46,7 +46,7 @@ def open_server(
         ConfigError: an endpoint or the configuration file is malformed.
         ListenFailed: the router cannot listen (the port is taken, say).
     """
-    from space.paths import default_data_dir
+    from space._paths import default_data_dir
 
     guard, acl = _secure_parts(identity, policy_file)
     session = open_router(

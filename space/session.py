@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING
 
 import zenoh
 
+from space._ports import probe
 from space.errors import ListenFailed, SpaceUnavailable, clause
-from space.ports import probe
 from space.zconfig import make_config, zenoh_reason
 
 if TYPE_CHECKING:

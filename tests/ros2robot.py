@@ -231,8 +231,9 @@ class Robot:
             kv = t["diagnostic_msgs/msg/KeyValue"]
             values = [kv(key="mode", value=mode)] if name in self.args.unmanaged else []
             values.append(kv(key="lifecycle", value=mode))
+            level = 1 if name in self.args.warn else 0
             statuses.append(t["diagnostic_msgs/msg/DiagnosticStatus"](
-                level=0, name=f"{self.ns.strip('/')}/{name}", message="OK", hardware_id=name,
+                level=level, name=f"{self.ns.strip('/')}/{name}", message="OK", hardware_id=name,
                 values=values))  # fmt: skip
         self.publish(self.diag_pub, t["diagnostic_msgs/msg/DiagnosticArray"](
             header=header, status=statuses))  # fmt: skip
@@ -273,6 +274,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rate", type=float, default=10.0, help="Hz of battery and diagnostics")
     parser.add_argument("--managed", nargs="*", default=["screen", "speakers", "microphone"])
     parser.add_argument("--unmanaged", nargs="*", default=["wheels", "laser", "base"])
+    parser.add_argument("--warn", nargs="*", default=[], help="devices reported at level WARN")
     parser.add_argument("--record", type=Path, help="append what the robot receives (JSON lines)")
     args = parser.parse_args(argv)
     robot = Robot(args)

@@ -18,7 +18,7 @@ import pytest
 import zenoh
 from cryptography import x509
 from cryptography.x509.oid import NameOID
-from rdflib import Literal, Namespace
+from rdflib import OWL, Literal, Namespace
 
 from conftest import AC_NS, REPO, Server, free_port, tspace_cmd, wait_for
 from space import (
@@ -170,8 +170,19 @@ def test_robot2_cannot_write_robot1s_battery_and_the_store_logs_it(secure, fleet
             robot2.write([(AC.robot1_battery, AC.battery_level, Literal("empty"))])
         own = (AC.robot2_battery, AC.battery_level)
         robot2.apply([(*own, Literal("low"))], [(*own, Literal("high"))])  # its own: fine
+        # Nor by making robot1's battery its own first, or robot2 the same as robot1.
+        claim = (AC.robot2, AC.has_device, AC.robot1_battery)
+        for triples in (
+            [claim],
+            [claim, (AC.robot1_battery, AC.battery_level, Literal("empty"))],
+            [(AC.robot2, OWL.sameAs, AC.robot1)],
+        ):
+            with pytest.raises(ChangesetRejected, match="an operator's to write"):
+                robot2.write(triples)
     assert battery(fleet, "robot1") == {Literal("high")}
     assert battery(fleet, "robot2") == {Literal("low")}
+    assert len(fleet.query((AC.robot2, None, AC.robot1_battery))) == 0
+    assert len(fleet.query((AC.robot2, OWL.sameAs, None))) == 0
     wait_for(
         lambda: "refused hw_monitor.robot2: may not write ac:robot1_battery" in secure.logs(),
         10,

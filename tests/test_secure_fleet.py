@@ -14,6 +14,7 @@ import subprocess
 import urllib.error
 import urllib.request
 
+import pytest
 from rdflib import Literal, Namespace
 from uprun import Up
 
@@ -46,10 +47,18 @@ def post(port: int, path: str, body: dict) -> int:
         return exc.code
 
 
-def test_the_fleet_works_in_secure_mode_and_the_hmi_cannot_set_a_battery(tmp_path):
+@pytest.mark.parametrize("reasoners", ["one for the fleet", "one per robot"])
+def test_the_fleet_works_in_secure_mode_and_the_hmi_cannot_set_a_battery(tmp_path, reasoners):
     certs = tmp_path / "certs"
     fleet = tmp_path / "fleet.toml"
-    fleet.write_text((REPO / "deploy" / "fleet.toml").read_text().replace('"../', f'"{REPO}/'))
+    text = (REPO / "deploy" / "fleet.toml").read_text().replace('"../', f'"{REPO}/')
+    if reasoners == "one per robot":  # the variant deploy/fleet.toml documents
+        reasoner = '[[agent]]\nname = "reasoner"\nargs = ['
+        assert reasoner in text
+        text = text.replace(
+            reasoner, '[[agent]]\nname = "reasoner"\nper_robot = true\nargs = ["--per-robot", '
+        )
+    fleet.write_text(text)
     init = tspace_cmd("certs", "init", str(certs), "--fleet", str(fleet))
     assert subprocess.run(init, capture_output=True, timeout=60).returncode == 0
     with Up(tmp_path, fleet, "--secure", str(certs), scheme="tls") as up:
@@ -81,11 +90,12 @@ def test_the_fleet_works_in_secure_mode_and_the_hmi_cannot_set_a_battery(tmp_pat
         endpoint = f"tls/127.0.0.1:{up.port}"
         with TripleSpace.open(endpoint, space="fleet", identity=identity) as ts:
             # Every agent's liveliness token got through under its identity; so robots are present.
-            agents = {"reasoner", "fleet_monitor", "hmi"} | {
-                f"{kind}.{robot}"
-                for kind in ("hw_monitor", "nav_monitor", "behavior")
-                for robot in names
-            }
+            kinds = ["hw_monitor", "nav_monitor", "behavior"]
+            agents = {"fleet_monitor", "hmi"} | {f"{k}.{r}" for k in kinds for r in names}
+            if reasoners == "one per robot":
+                agents |= {f"reasoner.{robot}" for robot in names}
+            else:
+                agents.add("reasoner")
             wait_for(lambda: set(alive_agents(ts.session, "fleet")) == agents, 30, "every agent")
             present = ts.query((None, AC.presence, Literal("present")))
             assert {s for s, _p, _o in present} == {AC[r] for r in names}
@@ -111,3 +121,24 @@ def test_the_fleet_works_in_secure_mode_and_the_hmi_cannot_set_a_battery(tmp_pat
         assert all("refused hmi:" in line for line in refused), refused  # no agent else
         up.proc.send_signal(signal.SIGINT)
         assert up.proc.wait(timeout=30) == 0, up.logs()
+
+
+def test_secure_up_names_a_missing_certificate_before_starting_anything(tmp_path):
+    certs = tmp_path / "certs"
+    init = tspace_cmd("certs", "init", str(certs), "--fleet", str(REPO / "deploy/hospital.toml"))
+    assert subprocess.run(init, capture_output=True, timeout=60).returncode == 0
+    (certs / "behavior.robot1.key").unlink()
+    up = tspace_cmd(
+        "up",
+        str(REPO / "deploy/hospital.toml"),
+        "--secure",
+        str(certs),
+        "--data",
+        str(tmp_path / "data"),
+    )
+    done = subprocess.run(up, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1
+    assert "no identity 'behavior.robot1'" in done.stderr and "missing behavior.robot1.key" in (
+        done.stderr
+    )
+    assert not (tmp_path / "data").exists()

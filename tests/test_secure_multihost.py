@@ -16,9 +16,12 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 from netns import PORT, REPO, Host, Network, require_netns
 
 from space import _certs
+
+pytestmark = pytest.mark.netns
 
 DEVICES = """@prefix ac: <https://w3id.org/tspace/selfconfig#> .
 ac:robot1 ac:has_device ac:robot1_battery . ac:robot2 ac:has_device ac:robot2_battery .

@@ -40,7 +40,7 @@ from agents.ros2.readings import (
 from agents.ros2.rmw import Entity, EntityKind, Qos
 from agents.sim.battery import DEFAULT_LEVELS
 from agents.view import AC
-from space import Change
+from space import Change, SpaceError
 
 PLACES = (AC.Place, AC.Room, AC.Dock, AC.Corridor)
 WATCHED = {AC.running_mode, AC.motion_speed, AC.current_task, AC.meters_per_second}
@@ -259,7 +259,11 @@ class Ros2Bridge(Agent):
         topic.pending = False
         topic.next_write = now + 1.0 / topic.spec.max_rate
         if topic.last:
-            self.set_values(topic.last, cause=None)
+            try:
+                self.set_values(topic.last, cause=None)
+            except SpaceError:
+                topic.last = None  # not written: the next message offers it again
+                raise
 
     # Space -> ROS
 

@@ -16,10 +16,11 @@ from typing import Any
 
 from agents.ros2.errors import ServiceFailed, ServiceTimeout
 from agents.ros2.node import Client, Node
-from space.errors import MalformedPayload
+from space import MalformedPayload
 
 log = logging.getLogger("ros2.drivers")
 RETRY = 2.0
+POLL = 5.0
 
 # lifecycle_msgs/msg/State primary states and lifecycle_msgs/msg/Transition ids
 UNCONFIGURED, INACTIVE, ACTIVE, FINALIZED = 1, 2, 3, 4
@@ -46,6 +47,7 @@ class LatestWins:
     """
 
     name = "driver"
+    idle: float | None = None  # once reached, act again after this many seconds (None: never)
 
     def __init__(self) -> None:
         self._wish: Any = None
@@ -74,7 +76,7 @@ class LatestWins:
     def _run(self) -> None:
         reached = True
         while True:
-            self._dirty.wait(None if reached else RETRY)
+            self._dirty.wait(self.idle if reached else RETRY)
             if self._stop.is_set():
                 return
             self._dirty.clear()
@@ -98,6 +100,10 @@ class LatestWins:
 class ManagedNode(LatestWins):
     """Drive one lifecycle node toward a primary state; report the state it says it is in.
 
+    The node is asked again every `POLL` s once there: a state changed behind the
+    bridge's back (`ros2 lifecycle set`, a node restarted) is reported, and led
+    back to the commanded one.
+
     Args:
         bridge: the bridge's ROS node, which declares the clients.
         node: the managed node's fully qualified name (`/robot1/screen`).
@@ -114,7 +120,7 @@ class ManagedNode(LatestWins):
         report: Callable[[int | None, str | None], None],
     ) -> None:
         super().__init__()
-        self.name = f"lifecycle {node}"
+        self.name, self.idle = f"lifecycle {node}", POLL
         self.node, self.timeout, self.report = node, timeout, report
         self._codec = bridge.codec
         self._change: Client = bridge.client(
@@ -130,7 +136,10 @@ class ManagedNode(LatestWins):
     def reach(self, wish: Any) -> bool:
         """Take the transitions from the node's state to `wish` (None: only ask), one by one."""
         current = self.state()
-        while wish is not None and (transition := next_transition(current, wish)) is not None:
+        for _ in range(len(_NEXT)):  # a node that says "done" but stays put is not asked forever
+            transition = None if wish is None else next_transition(current, wish)
+            if transition is None:
+                break
             request = self._codec.new(
                 "lifecycle_msgs/srv/ChangeState_Request", transition={"id": transition}
             )

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from space.errors import InputError, MalformedPayload, SpaceError
+from space import InputError, MalformedPayload, SpaceError
 
 
 class MappingError(InputError):

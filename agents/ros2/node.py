@@ -212,8 +212,13 @@ class Node:
                 try:
                     attachment = Attachment.decode(sample.attachment.to_bytes())
                 except MalformedAttachment as exc:
-                    log.warning("%s: %s; skipped", endpoint.name, exc)
-                    return
+                    # The message does not depend on it (rmw_zenoh before 0.2.4 wrote
+                    # named pairs): say so once, take the message.
+                    if key not in warned:
+                        warned.add(key)
+                        log.warning(
+                            "%s: %s (an older rmw_zenoh?); messages still taken", endpoint.name, exc
+                        )
             try:
                 message = self.codec.decode(ros_type, sample.payload.to_bytes())
             except MalformedMessage as exc:

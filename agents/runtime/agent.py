@@ -12,9 +12,9 @@ AGENTS_GROUP = "tspace.agents"
 def agent_entries() -> dict[str, importlib.metadata.EntryPoint]:
     """Return the agents that run as a process, by name: the `tspace.agents` entry points.
 
-    Each names an agent's `main(argv) -> int`; they are loaded only when run, so
-    `tspace --help` stays fast, and a new agent (ours or another distribution's)
-    is one line in its `pyproject.toml`.
+    Each names an agent's `main(argv, prog) -> int` (`prog` for its usage line);
+    they are loaded only when run, so `tspace --help` stays fast, and a new agent
+    (ours or another distribution's) is one line in its `pyproject.toml`.
     """
     return {e.name: e for e in importlib.metadata.entry_points(group=AGENTS_GROUP)}
 
@@ -40,4 +40,4 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the agent's `main` with the remaining options; return its exit code."""
     main = agent_entries()[args.agent].load()
-    return int(main(args.options))
+    return int(main(args.options, prog=f"tspace agent {args.agent}"))

@@ -33,6 +33,9 @@ from space import (
 
 STORE_STARTUP = 30.0
 TICK = 0.1
+# Firings a frame reads: in log mode each one is printed once, so a burst of answers
+# between two frames must not push one out unprinted.
+FIRINGS_SHOWN = 100
 
 
 @dataclass(frozen=True)
@@ -43,9 +46,11 @@ class Options:
     listen: list[str]
     data: Path
     hmi_port: int | None = None
+    hmi_listen: str | None = None  # the HMI's address (the launch file's, else 127.0.0.1)
     scenario: Scenario | None = None
     once: bool = False
     step_timeout: float = 90.0
+    fresh: bool = False
     secure: Path | None = None  # certificates: mutual TLS only, every process its identity
     policy: Path | None = None
 
@@ -55,6 +60,12 @@ def client_endpoint(listen: str) -> str:
     for wildcard in ("0.0.0.0", "[::]"):
         listen = listen.replace(f"/{wildcard}:", "/127.0.0.1:")
     return listen
+
+
+def identity_of_agent(agent: AgentSpec) -> str:
+    """Return the identity `tspace certs init --fleet` made for an agent: KIND.ROBOT or KIND."""
+    kind = agent.name.split("/")[0]
+    return f"{kind}.{agent.robot}" if agent.robot else kind
 
 
 class Deployment:
@@ -82,13 +93,16 @@ class Deployment:
         )
         self.mirror = SpaceMirror()
         self.bad_values = BadValues(view.event)
+        self._said: dict[str, str] = {}  # firings' sentences by changeset id
         self._view_failure = ""
         self.scenario: ScenarioRun | None = None
         self.robot = launch.robots[0] if launch.robots else "robot1"
         self.hmi_port: int | None = None
-        self.operator = (
-            None if options.secure is None else load_identity(options.secure, "operator")
-        )
+        self.operator = None
+        if options.secure is not None:  # every certificate is there, or say which is not, now
+            self.operator = load_identity(options.secure, "operator")
+            for agent in launch.agents:
+                load_identity(options.secure, identity_of_agent(agent))
 
     def hmi_agent(self) -> AgentSpec | None:
         """Return the launch file's HMI agent, if it has one."""
@@ -99,10 +113,9 @@ class Deployment:
         argv = [sys.executable, "-m", agent.module, "--connect", self.connect]
         argv += ["--space", self.launch.space]
         if self.options.secure is not None:
-            # The identity `tspace certs init --fleet` made for it, KIND.ROBOT or KIND, is
-            # its name too: the routers let it declare a liveliness token under that name only.
-            kind = agent.name.split("/")[0]
-            identity = f"{kind}.{agent.robot}" if agent.robot else kind
+            # Its identity is its name too: the routers let it declare a liveliness token
+            # under that name only.
+            identity = identity_of_agent(agent)
             argv += ["--secure", str(self.options.secure), "--identity", identity]
             argv += ["--name", identity]
         if agent.robot:
@@ -110,11 +123,17 @@ class Deployment:
         args = list(agent.args)
         if self.hmi_port is not None and agent.module == "agents.hmi":
             args = _set_option(args, "--http-port", str(self.hmi_port))
+            if self.options.hmi_listen:
+                args = _set_option(args, "--http-host", self.options.hmi_listen)
         return (*argv, *args)
 
     def hmi_url(self) -> str | None:
         """Return the URL of the HMI agent's page, once `run` chose its port."""
-        return None if self.hmi_port is None else f"http://127.0.0.1:{self.hmi_port}/"
+        if self.hmi_port is None:
+            return None
+        host = self.options.hmi_listen or "127.0.0.1"
+        host = "127.0.0.1" if host in ("0.0.0.0", "::") else host
+        return f"http://{f'[{host}]' if ':' in host else host}:{self.hmi_port}/"
 
     def run(self) -> int:
         """Start everything, show it until stopped, stop everything; return the exit code.
@@ -122,6 +141,8 @@ class Deployment:
         Must be called from the main thread (it installs SIGINT and SIGTERM handlers).
 
         Raises:
+            ConfigError: with `secure`, a process's certificate is missing (checked at
+                construction, before anything starts).
             ConfigError, ListenFailed: the store's router could not listen on `listen`
                 (checked before anything starts, so the user reads why at once).
             InputError: the HMI's port, named by `--hmi-port` or the launch file, is taken.
@@ -129,7 +150,9 @@ class Deployment:
         check_can_listen(self.options.listen)
         hmi = self.hmi_agent()
         if hmi is not None:
-            self.hmi_port = choose_port(hmi, self.options.hmi_port, self.view.event)
+            self.hmi_port = choose_port(
+                hmi, self.options.hmi_port, self.view.event, self.options.hmi_listen
+            )
         previous = {
             sig: signal.signal(sig, self._on_signal) for sig in (signal.SIGINT, signal.SIGTERM)
         }
@@ -146,8 +169,9 @@ class Deployment:
             ts = self._wait_for_store()
             if ts is None:
                 return 1
-            self._load(ts)
             scenario = self.options.scenario
+            # A scenario is a story from its own start: never from where a last run stopped.
+            self._load(ts, fresh=self.options.fresh or scenario is not None)
             if scenario is not None and scenario.prepare is not None:
                 scenario.prepare(ts, self.robot)
             for agent in self.launch.agents:
@@ -199,13 +223,22 @@ class Deployment:
             ts.close()
         return None
 
-    def _load(self, ts: TripleSpace) -> None:
-        """Write the launch file's Turtle files into a space that is still empty."""
-        if not self.launch.load:
+    def _load(self, ts: TripleSpace, *, fresh: bool) -> None:
+        """Write the launch file's Turtle files into a space that is empty, or emptied if `fresh`.
+
+        Without `fresh` a space that holds anything is left as it is: the robots
+        resume where they were.
+        """
+        asserted, inferred, _ = ts.graphs((None, None, None), timeout=10.0)
+        held = len(asserted) + len(inferred)
+        if held and fresh:
+            # One changeset: a subscriber sees the old state go at once, never half of it.
+            ts.apply(removed=asserted, inferred_removed=inferred, timeout=60.0)
+            self.view.event(f"space {self.launch.space}: started afresh ({held} triples removed)")
+        elif held:
+            self.view.event(f"space {self.launch.space} holds {held} triples; resuming from them")
             return
-        held, _ = ts.snapshot((None, None, None), timeout=10.0)
-        if len(held):
-            self.view.event(f"space {self.launch.space} holds {len(held)} triples; not reloading")
+        if not self.launch.load:
             return
         for path in self.launch.load:
             graph = read_turtle(str(path))
@@ -249,6 +282,10 @@ class Deployment:
         if not self.options.once:
             return None
         if run.finished:
+            try:
+                run.tick(ts, self.mirror)  # its finishing action, if not run yet
+            except SpaceError as exc:
+                self.view.event(f"scenario: could not finish ({exc})")
             print(f"scenario {run.scenario.name}: completed", flush=True)
             return 0
         if run.failure is not None:
@@ -276,10 +313,11 @@ class Deployment:
         url = self.hmi_url()
         if url:
             header += f", HMI {url}"
+        graph = self.mirror.copy()
         return Frame(
             header=header,
-            robots=read_robots(self.mirror.copy(), self.bad_values),
-            firings=read_firings(self.mirror.recent()),
+            robots=read_robots(graph, self.bad_values),
+            firings=read_firings(self.mirror.recent(), FIRINGS_SHOWN, graph, self._said),
             processes=self.supervisor.status(),
             footer=self.scenario.progress if self.scenario else "Ctrl-C stops everything.",
         )

@@ -16,7 +16,7 @@ from collections import deque
 from dataclasses import dataclass
 from typing import TextIO
 
-from agents.runtime.robotview import Firing, RobotState
+from agents.runtime.robotview import Answer, RobotState
 from agents.runtime.supervisor import ProcessStatus
 
 REDRAW_EVERY = 0.25
@@ -28,7 +28,7 @@ class Frame:
 
     header: str
     robots: list[RobotState]
-    firings: list[Firing]
+    firings: list[Answer]
     processes: list[ProcessStatus]
     footer: str = ""
 
@@ -50,8 +50,11 @@ def devices_line(robot: RobotState) -> str:
     return ", ".join(f"{d.name.removeprefix(prefix)} {d.mode or '?'}" for d in robot.devices)
 
 
-def firing_line(firing: Firing) -> str:
-    """Return a firing and its cause on one line."""
+def firing_line(firing: Answer, raw: bool = False) -> str:
+    """Return a firing on one line: its sentence and rules, or (`raw`) its triples and cause."""
+    if firing.sentence and not raw:
+        rules = f" [{', '.join(firing.rules)}]" if firing.rules else ""
+        return f"{firing.time} {firing.sentence}{rules}"
     what = "; ".join(firing.added) or "; ".join(f"-{t}" for t in firing.removed)
     because = f" <- {firing.cause_agent}: {'; '.join(firing.cause)}" if firing.cause_agent else ""
     rules = f" [{', '.join(firing.rules)}]" if firing.rules else ""
@@ -65,12 +68,14 @@ class LiveView:
         out: where the view goes (stdout).
         err: where events go in log mode (stderr).
         redraw: True for a terminal screen; False for log lines.
+        raw: show firings as their triples and cause, not as sentences.
     """
 
-    def __init__(self, out: TextIO, err: TextIO, redraw: bool) -> None:
+    def __init__(self, out: TextIO, err: TextIO, redraw: bool, raw: bool = False) -> None:
         self._out = out
         self._err = err
         self._redraw = redraw
+        self._raw = raw
         self._lock = threading.Lock()
         self._events: deque[str] = deque(maxlen=8)
         self._last_draw = 0.0
@@ -78,9 +83,9 @@ class LiveView:
         self._seen_seq = -1
 
     @classmethod
-    def for_terminal(cls) -> LiveView:
+    def for_terminal(cls, raw: bool = False) -> LiveView:
         """Return a view on stdout that redraws only if stdout is a terminal."""
-        return cls(sys.stdout, sys.stderr, sys.stdout.isatty())
+        return cls(sys.stdout, sys.stderr, sys.stdout.isatty(), raw)
 
     def event(self, line: str) -> None:
         """Show a supervisor or scenario event; callable from any thread."""
@@ -115,7 +120,7 @@ class LiveView:
             self._seen_robots[robot.name] = summary
         for firing in reversed(frame.firings):
             if firing.seq > self._seen_seq:
-                lines.append(f"firing: {firing_line(firing)}")
+                lines.append(f"firing: {firing_line(firing, self._raw)}")
         if frame.firings:
             self._seen_seq = max(self._seen_seq, frame.firings[0].seq)
         if lines:
@@ -141,7 +146,7 @@ class LiveView:
             for p in frame.processes
         ]
         lines += ["", "rule firings (newest first):"]
-        lines += [f"  {firing_line(f)}" for f in frame.firings[:8]]
+        lines += [f"  {firing_line(f, self._raw)}" for f in frame.firings[:8]]
         with self._lock:
             events = list(self._events)
         lines += ["", "events:", *(f"  {e}" for e in events)]

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from rdflib import RDF, BNode, Graph, Literal, URIRef
 from rdflib.term import Node
 
+from agents.sentences import firing_sentence
 from agents.vocabulary import AC, FIRING_PROPERTIES, PREFIXES
 from space import ChangeRecord, Triple
 
@@ -64,7 +65,7 @@ class RobotState:
 
 
 @dataclass(frozen=True)
-class Firing:
+class Answer:
     """A changeset that answered another one (a rule firing or an agent reacting).
 
     Attributes:
@@ -76,6 +77,7 @@ class Firing:
         removed: what it retracted, compacted.
         cause_agent: who wrote the cause, if the cause is still remembered.
         cause: the cause's triples, compacted (empty if forgotten).
+        sentence: the firing said as a sentence (`agents.sentences`), "" if not asked for.
     """
 
     seq: int
@@ -86,6 +88,7 @@ class Firing:
     removed: tuple[str, ...]
     cause_agent: str | None
     cause: tuple[str, ...]
+    sentence: str = ""
 
 
 class BadValues:
@@ -210,8 +213,21 @@ def _noise(triple: Triple) -> bool:
     return any(isinstance(t, BNode) for t in triple)
 
 
-def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firing]:
-    """Return the last `limit` changesets that name a cause, newest first."""
+def read_firings(
+    records: Iterable[ChangeRecord],
+    limit: int = 20,
+    graph: Graph | None = None,
+    said: dict[str, str] | None = None,
+) -> list[Answer]:
+    """Return the last `limit` changesets that name a cause, newest first.
+
+    With `graph` (the space now), each is also said as a sentence; `said`
+    remembers the sentences by changeset id, so that a view redrawn on every
+    change words each firing once.
+    """
+    said = {} if said is None else said
+    if len(said) > 10 * limit:
+        said.clear()
     records = list(records)
     by_id = {r.id: r for r in records}
     firings = []
@@ -222,7 +238,7 @@ def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firin
         stamp = record.timestamp.strftime("%H:%M:%S.%f")[:-3] if record.timestamp else ""
         names = sorted({str(o) for _, p, o in record.added if p == AC.rule_name})
         firings.append(
-            Firing(
+            Answer(
                 seq=record.seq,
                 agent=record.agent,
                 time=stamp,
@@ -231,11 +247,27 @@ def read_firings(records: Iterable[ChangeRecord], limit: int = 20) -> list[Firin
                 removed=tuple(describe(t) for t in record.removed if not _noise(t)),
                 cause_agent=cause.agent if cause else None,
                 cause=tuple(describe(t) for t in cause.added if not _noise(t)) if cause else (),
+                sentence="" if graph is None else _said(record, cause, graph, names, said),
             )
         )
         if len(firings) == limit:
             break
     return firings
+
+
+def _said(
+    record: ChangeRecord,
+    cause: ChangeRecord | None,
+    graph: Graph,
+    names: list[str],
+    said: dict[str, str],
+) -> str:
+    sentence = said.get(record.id)
+    if sentence is None:
+        because = cause.added if cause else ()
+        sentence = firing_sentence(because, record.added, record.removed, graph, names)
+        said[record.id] = sentence
+    return sentence
 
 
 def task_named(graph: Graph, task_type: str) -> URIRef | None:

@@ -53,24 +53,28 @@ class Scenario:
         agent_args: options appended per agent name (e.g. a faster clock).
         prepare: run once the space is loaded and before any agent starts, to set
             the stage (with the space and the robot's name).
+        finish: run once after the last step, to leave the robot in a state that
+            lasts (the battery scenario ends the visit: the robot idles).
     """
 
     name: str
     steps: tuple[Step, ...]
     agent_args: dict[str, list[str]] = field(default_factory=dict)
     prepare: Callable[[TripleSpace, str], None] | None = None
+    finish: Callable[[TripleSpace, str], None] | None = None
 
 
-def _assign(task_type: str, person: str) -> Callable[[TripleSpace, str], None]:
-    """Return an action that requests a task for a person, as the HMI does."""
+def _request(task_type: str, person: str | None = None) -> Callable[[TripleSpace, str], None]:
+    """Return an action that requests a task (for a person, if given), as the HMI does."""
 
     def act(ts: TripleSpace, robot: str) -> None:
         task = task_named(ts.query((None, AC.type, None)), task_type)
         if task is None:
             raise LookupError(f"the space has no task of type {task_type!r}")
-        ts.write(
-            [(AC[robot], AC.requested_task, task), (AC[robot], AC.attended_person, AC[person])]
-        )
+        wanted = [(AC[robot], AC.requested_task, task)]
+        if person is not None:
+            wanted.append((AC[robot], AC.attended_person, AC[person]))
+        ts.write(wanted)
 
     return act
 
@@ -107,7 +111,7 @@ BATTERY = Scenario(
         Step(
             "robot attends a patient (task AttendingPatient)",
             lambda r: r.task_type == "AttendingPatient",
-            _assign("AttendingPatient", "patient_ane"),
+            _request("AttendingPatient", "patient_ane"),
         ),
         Step("battery drains to very low", lambda r: r.battery == "very low"),
         Step("robot heads to the dock (task GoingToDock)", lambda r: r.task_type == "GoingToDock"),
@@ -133,6 +137,9 @@ BATTERY = Scenario(
         "behavior": ["--time-scale", "30"],
     },
     prepare=_battery_at(13, "low"),
+    # The patient's visit never ends by itself: left on, it would overrun, be postponed,
+    # taken up again, and so on. The story over, the visit is done and the robot idles.
+    finish=_request("Idle"),
 )
 
 SCENARIOS = {s.name: s for s in (BATTERY,)}
@@ -166,6 +173,7 @@ class ScenarioRun:
         self._lock = threading.Lock()
         self._index = 0
         self._acted = -1
+        self._finished = False
         self._since = time.monotonic()
         self._started = self._since
         self.failure: str | None = None
@@ -217,6 +225,13 @@ class ScenarioRun:
         """
         with self._lock:
             index = self._index
+            finish = index == len(self.scenario.steps) and not self._finished
+            if finish:
+                self._finished = True
+        if finish and self.scenario.finish is not None:
+            self.scenario.finish(ts, self.robot)
+            self._on_event(f"scenario {self.scenario.name}: over, the robot carries on")
+        with self._lock:
             if index == len(self.scenario.steps) or self.failure is not None:
                 return
             step = self.scenario.steps[index]

@@ -41,6 +41,23 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--hmi-port", type=int, metavar="PORT", help="HTTP port of the HMI (overrides the file)"
     )
     p.add_argument(
+        "--hmi-listen",
+        metavar="HOST",
+        help="address the HMI serves on (default 127.0.0.1: this machine only; 0.0.0.0: every "
+        "interface, for a tablet on the ward's network)",
+    )
+    p.add_argument(
+        "--fresh",
+        action="store_true",
+        help="start the space from the launch file's state (default: resume where it was; "
+        "a --scenario always starts afresh)",
+    )
+    p.add_argument(
+        "--raw-firings",
+        action="store_true",
+        help="show rule firings as their triples and cause, not as sentences",
+    )
+    p.add_argument(
         "--scenario", metavar="NAME", help="play a scenario (battery: the paper's example)"
     )
     p.add_argument(
@@ -94,7 +111,9 @@ def run(args: argparse.Namespace) -> int:
         scenario=SCENARIOS[args.scenario] if args.scenario else None,
         once=args.once,
         step_timeout=args.step_timeout,
+        fresh=args.fresh,
+        hmi_listen=args.hmi_listen,
         secure=args.secure,
         policy=args.policy or (shipped(POLICY) if args.secure else None),
     )
-    return Deployment(options, LiveView.for_terminal()).run()
+    return Deployment(options, LiveView.for_terminal(raw=args.raw_firings)).run()

@@ -33,6 +33,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "-v", "--verbose", action="count", default=0, help="more log output (-vv for debug)"
     )
+    parser.add_argument("--version", action="version", version=f"tspace {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     modules = [
         importlib.import_module(f"{__name__}.{info.name}")
@@ -47,6 +48,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 COMMANDS_GROUP = "tspace.commands"
+
+
+def _version() -> str:
+    try:
+        return importlib.metadata.version("tspace")
+    except importlib.metadata.PackageNotFoundError:
+        return "(not installed)"
 
 
 def plugged_commands() -> list[ModuleType]:

@@ -7,20 +7,26 @@ write; this module says whether the policy allows what it changes, which
 Zenoh cannot see: a robot's agents change their robot's things only, the HMI
 and the fleet monitor their own predicates only, nobody but a reasoner the
 inferred graph.
+
+What a robot owns is read from the space as it is, never from the write
+itself: a robot's agents cannot add a link that would make another robot's
+device theirs, nor use the ontology's own words (`owl:sameAs` would make
+one robot another); a robot's makeup is an operator's to write.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 
-from rdflib import Graph
+from rdflib import OWL, RDFS, Graph
 from rdflib.term import Node
 
 from space import keys
 from space._policy import Policy, Role
 from space.changeset import Changeset
 from space.store.state import SpaceState
-from space.terms import Triple
+
+_SCHEMA = (str(OWL), str(RDFS))  # the ontology's own words, not a robot's to use
 
 
 def writer_of(key: str) -> str | None:
@@ -61,28 +67,27 @@ class WriteGuard:
                     return f"refused {writer}: may not write {_name(p, show)} (of {_name(s, show)})"
             return None
         robot = self.policy.robot_of[writer]  # a robot agent's, or a robot router's own
+        makeup = {*self.policy.links, *self.policy.backlinks}
+        for _s, p, _o in cs.added:
+            if p in makeup or str(p).startswith(_SCHEMA):
+                return f"refused {writer}: may not add {_name(p, show)} (an operator's to write)"
+        asserted = state.graphs[keys.ASSERTED]
         for s, p, _o in changed:
-            if not self._owns(robot, s, state, cs):
+            if not self._owns(robot, s, asserted):
                 return (
                     f"refused {writer}: may not write {_name(s, show)} {_name(p, show)}, "
                     f"not a thing of {_name(robot, show)}"
                 )
         return None
 
-    def _owns(self, robot: Node, subject: Node, state: SpaceState, cs: Changeset) -> bool:
-        """Say whether `subject` is `robot`, linked from it, or links to it (state or `cs`)."""
+    def _owns(self, robot: Node, subject: Node, asserted: Graph) -> bool:
+        """Say whether `subject` is `robot`, linked from it, or links to it, in the space."""
         if subject == robot:
             return True
-        asserted = state.graphs[keys.ASSERTED]
-        for link in self.policy.links:
-            if _holds((robot, link, subject), asserted, cs):
-                return True
-        return any(_holds((subject, b, robot), asserted, cs) for b in self.policy.backlinks)
+        if any((robot, link, subject) in asserted for link in self.policy.links):
+            return True
+        return any((subject, b, robot) in asserted for b in self.policy.backlinks)
 
 
 def _name(term: Node, compact: Callable[[str], str | None]) -> str:
     return compact(str(term)) or f"<{term}>"
-
-
-def _holds(triple: Triple, asserted: Graph, cs: Changeset) -> bool:
-    return triple in cs.added or triple in asserted
