@@ -8,9 +8,12 @@ Screenshots of the scenario at 1024 and 1920 px go to bench/out/ (for the docs).
 from __future__ import annotations
 
 import base64
+import contextlib
 import itertools
 import json
+import os
 import shutil
+import signal
 import socket
 import subprocess
 import time
@@ -85,11 +88,15 @@ class Browser:
             start_new_session=True,
         )
         self._ids = itertools.count(1)
-        port_file = profile / "DevToolsActivePort"
-        wait_for(lambda: port_file.is_file() and port_file.read_text().strip(), 30, "Chromium")
-        port = int(port_file.read_text().split()[0])
-        page = wait_for(lambda: self._page(port), 30, "Chromium's page")
-        self.ws = websocket.create_connection(page, timeout=10, suppress_origin=True)
+        try:
+            port_file = profile / "DevToolsActivePort"
+            wait_for(lambda: port_file.is_file() and port_file.read_text().strip(), 30, "Chromium")
+            port = int(port_file.read_text().split()[0])
+            page = wait_for(lambda: self._page(port), 30, "Chromium's page")
+            self.ws = websocket.create_connection(page, timeout=10, suppress_origin=True)
+        except BaseException:
+            self.close()  # a browser that never answered is still a process group to end
+            raise
 
     @staticmethod
     def _page(port: int) -> str | None:
@@ -102,10 +109,14 @@ class Browser:
         return next((t["webSocketDebuggerUrl"] for t in targets if t["type"] == "page"), None)
 
     def close(self) -> None:
-        if hasattr(self, "ws"):
-            self.ws.close()
-        self.proc.kill()
-        self.proc.wait()
+        try:
+            if hasattr(self, "ws"):
+                self.ws.close()
+        finally:
+            # Chromium's renderer and zygote processes share its session: end them all.
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
 
     def call(self, method: str, **params: object) -> dict:
         """Send one DevTools command and return its result (events in between are skipped)."""

@@ -68,3 +68,27 @@ def test_rules_check_accepts_a_jena_file_with_a_name_used_twice_and_warns(tmp_pa
         in captured.err
     )
     assert f"r1 ({rules}:4)" in captured.out
+
+
+def test_rules_check_warns_that_a_rule_after_a_prefix_on_its_line_is_dropped(tmp_path, capsys):
+    rules, _ = _files(
+        tmp_path,
+        "@prefix pre: <http://jena.hpl.hp.com/prefix#> [r1: (?f pre:father ?a) -> (?a pre:x ?f)]\n",
+    )
+    assert main(["rules", "check", rules]) == 0
+    captured = capsys.readouterr()
+    assert "0 rules" in captured.out  # as Jena reads it: the line is the prefix's
+    assert f"{rules}:1:1: text after @prefix's <...> is ignored" in captured.err
+
+
+def test_reason_without_an_ontology_runs_only_the_rules(tmp_path, capsys):
+    rules, data = _files(
+        tmp_path,
+        "[r: (?x <http://example.org/p> ?y) -> (?y <http://example.org/p> ?x)]\n",
+        f"<{EX}x> <http://www.w3.org/2002/07/owl#sameAs> <{EX}y> .\n<{EX}x> <{EX}p> <{EX}z> .\n",
+    )
+    assert main(["reason", "--rules", rules, "--data", data]) == 0
+    state = Graph().parse(data=capsys.readouterr().out, format="turtle")
+    assert (URIRef(EX + "z"), URIRef(EX + "p"), URIRef(EX + "x")) in state
+    # OWL RL's equality rules would copy x's triples to y: not without an ontology.
+    assert (URIRef(EX + "y"), URIRef(EX + "p"), URIRef(EX + "z")) not in state

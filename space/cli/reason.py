@@ -17,8 +17,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "update, and print the state as Turtle. As in the space, a value of an "
         "owl:FunctionalProperty in the update replaces the asserted old value. "
         "The production rules that fired, and what print() prints, go to stderr. "
-        "With --no-owl only the rules run (as Jena's GenericRuleReasoner does); else OWL RL "
-        "for the ontology runs with them.",
+        "OWL RL runs with the rules only when an --ontology is given (and not --no-owl); "
+        "otherwise only the rules run, as Jena's GenericRuleReasoner runs them.",
     )
     p.add_argument("--rules", nargs="+", required=True, metavar="RULES", help="rules files")
     p.add_argument("--data", nargs="+", required=True, metavar="DATA", help="RDF data files")
@@ -28,7 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--no-owl",
         action="store_true",
-        help="run only the rules, no OWL RL (the ontology is still loaded as data)",
+        help="no OWL RL even with --ontology (the ontology is still loaded as data)",
     )
     p.add_argument(
         "--show",
@@ -52,7 +52,10 @@ def run(args: argparse.Namespace) -> int:
         print(text, file=sys.stderr)
 
     engine = RuleEngine.from_files(
-        rules=args.rules, ontology=args.ontology, owl=not args.no_owl, printer=to_stderr
+        rules=args.rules,
+        ontology=args.ontology,
+        owl=bool(args.ontology) and not args.no_owl,
+        printer=to_stderr,
     )
     deltas = [engine.load(read_graph(args.data))]
     update, retract = read_graph(args.update), read_graph(args.retract)

@@ -111,6 +111,9 @@ def _check_call(rule: Rule, call: Call, place: Place) -> None:
     if place not in builtin.places:
         where = "body" if place is Place.BODY else "head"
         _fail(rule, call.where, f"{call.name}() cannot be used in a rule's {where}")
+    problem = builtin.check(call.args)
+    if problem:
+        _fail(rule, call.where, f"{call.name}(): {problem}")
 
 
 def _check_indices(rule: Rule, call: Call) -> None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 
-from rdflib import BNode, Graph, Literal, URIRef
+from rdflib import BNode, Graph, URIRef
 from rdflib.term import Node
 
 from space._turtle import read_turtle
@@ -118,7 +118,7 @@ class RuleEngine:
         """Yield the current triples, or only the asserted or only the inferred ones."""
         functors, hidden = self.terms.functors, self._ctx.hidden
         for t in self._store:
-            if t[2] in functors or t[1] in hidden:
+            if t[2] in functors or t[1] in hidden or t[0] in functors:
                 continue
             if origin is None or (t in self._asserted) == (origin is Origin.ASSERTED):
                 yield self._decode(t)
@@ -135,9 +135,9 @@ class RuleEngine:
         ids = [None if x is None else self.terms.find(x) for x in pattern]
         if any(i is None and x is not None for i, x in zip(ids, pattern, strict=True)):
             return  # a term the engine never saw: nothing matches
-        functors = self.terms.functors
+        functors, hidden = self.terms.functors, self._ctx.hidden
         for t in self._store.match(*ids):
-            if t[2] not in functors:
+            if t[2] not in functors and t[1] not in hidden and t[0] not in functors:
                 yield self._decode(t)
 
     def __contains__(self, triple: object) -> bool:
@@ -440,6 +440,12 @@ def _format(path: Path) -> str:
 def _graph(triples: Iterable[Triple]) -> Graph:
     graph = Graph()
     for triple in triples:
-        if not isinstance(triple[2], FunctorValue) and not isinstance(triple[0], Literal):
+        s, p, o = triple
+        # A rule may put a literal or a functor where RDF allows none: not in a Graph.
+        if (
+            isinstance(s, URIRef | BNode)
+            and isinstance(p, URIRef)
+            and not isinstance(o, FunctorValue)
+        ):
             graph.add(triple)
     return graph

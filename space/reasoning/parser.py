@@ -17,6 +17,7 @@ prefixes and is found relative to it.
 from __future__ import annotations
 
 import logging
+import re
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
@@ -48,6 +49,7 @@ log = logging.getLogger(__name__)
 # A word with one of these before its colon is a full IRI when no prefix of that name is known.
 _SCHEMES = ("http", "https", "urn", "file", "ftp", "mailto")
 _DATATYPE_SCHEMES = ("http", "urn", "ftp", "mailto")
+_LANGUAGE = re.compile(r"@[A-Za-z]{1,8}(-[A-Za-z0-9]{1,8})*")
 
 
 def parse_rules(
@@ -68,8 +70,9 @@ def parse_rules(
         RuleError: a rule uses an unknown builtin, a wrong arity, a bad drop/remove index
             or a builtin input nothing binds.
     """
-    rules = _Reader(registry, ()).read(text, source, dict(prefixes or DEFAULT_PREFIXES))
-    return mark_shared_names(rules, warn or log.warning)
+    warn = warn or log.warning
+    rules = _Reader(registry, (), warn).read(text, source, dict(prefixes or DEFAULT_PREFIXES))
+    return mark_shared_names(rules, warn)
 
 
 def load_rules(
@@ -82,17 +85,21 @@ def load_rules(
     Raises:
         RuleSyntaxError, RuleError: as `parse_rules`; a missing file is a RuleSyntaxError.
     """
-    reader = _Reader(registry, ())
+    warn = warn or log.warning
+    reader = _Reader(registry, (), warn)
     rules = [rule for path in paths for rule in reader.read_file(Path(path), DEFAULT_PREFIXES)]
-    return mark_shared_names(rules, warn or log.warning)
+    return mark_shared_names(rules, warn)
 
 
 class _Reader:
     """Turn files into rules, following includes (and refusing include cycles)."""
 
-    def __init__(self, registry: Registry, including: tuple[Path, ...]) -> None:
+    def __init__(
+        self, registry: Registry, including: tuple[Path, ...], warn: Callable[[str], None]
+    ) -> None:
         self.registry = registry
         self.including = including
+        self.warn = warn
 
     def read_file(
         self, path: Path, prefixes: dict[str, str], where: Location | None = None
@@ -109,13 +116,19 @@ class _Reader:
             ) from exc
         except UnicodeDecodeError as exc:
             raise RuleSyntaxError(located(where, None, f"{path}: not UTF-8 text")) from exc
-        inner = _Reader(self.registry, (*self.including, resolved))
+        inner = _Reader(self.registry, (*self.including, resolved), self.warn)
         yield from inner.read(text, str(path), dict(prefixes))
 
     def read(self, text: str, source: str, prefixes: dict[str, str]) -> Iterator[Rule]:
         lexed = lex(text, source)
         includes = []
         for directive in lexed.directives:
+            ignored = _ignored(directive.rest)
+            if ignored:
+                self.warn(
+                    f"{directive.where}: text after {directive.keyword}'s <...> is ignored, as "
+                    f"Jena ignores it: {ignored[:40]!r} (write it on a line of its own)"
+                )
             if directive.keyword == "@prefix":
                 name, iri = _prefix(directive)
                 prefixes[name] = iri
@@ -154,6 +167,12 @@ def _prefix(directive: Directive) -> tuple[str, str]:
         raise RuleSyntaxError(located(directive.where, None, "@prefix needs a name and an IRI"))
     name = words[0].removesuffix(":")
     return name, _uri_argument(words[1], directive)
+
+
+def _ignored(rest: str) -> str:
+    """Return what follows a directive's `<...>` other than a dot: Jena drops it unread."""
+    close = rest.find(">")
+    return rest[close + 1 :].strip().removeprefix(".").strip() if close >= 0 else ""
 
 
 def _uri_argument(rest: str, directive: Directive) -> str:
@@ -293,7 +312,7 @@ class _Parser:
             if ":" in datatype:
                 datatype = self.expand(after, datatype, _DATATYPE_SCHEMES)
             return Literal(token.text, datatype=URIRef(datatype))
-        if after.kind is Kind.WORD and after.glued and after.text.startswith("@"):
+        if after.kind is Kind.WORD and after.glued and _LANGUAGE.fullmatch(after.text):
             self.next()
             return Literal(token.text, lang=after.text[1:])
         return Literal(token.text)

@@ -66,6 +66,10 @@ class Builtin:
         """Return the argument positions this builtin binds when they are unbound."""
         return frozenset()
 
+    def check(self, args: tuple[object, ...]) -> str | None:
+        """Return why the call's constant arguments cannot work (checked on load), or None."""
+        return None
+
     def accepts(self, nargs: int) -> bool:
         """Tell whether a call with `nargs` arguments is well formed."""
         low, high = self.arity

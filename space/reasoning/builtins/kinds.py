@@ -114,7 +114,6 @@ class CountLiteralValues(Builtin):
     name = "countLiteralValues"
     arity = (3, 3)
     monotonic = False
-    deferred = True
 
     def outputs(self, nargs: int) -> frozenset[int]:
         return frozenset({2})
