@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 
-from rdflib import BNode, Graph, Literal, URIRef
+from rdflib import OWL, BNode, Graph, Literal, URIRef
 from rdflib.term import Node
 
 from space.errors import InputError
@@ -22,6 +22,7 @@ from space.reasoning.builtins import Context, Registry, default_registry
 from space.reasoning.changes import ChangeLog
 from space.reasoning.checks import check_names, check_rule
 from space.reasoning.compile import CompiledRule, RuleIndex
+from space.reasoning.conflicts import Conflict, read_conflicts
 from space.reasoning.delta import Delta, Firing, Origin, Why
 from space.reasoning.errors import RuleError, unreadable
 from space.reasoning.joins import JoinCompiler, Match
@@ -87,6 +88,7 @@ class RuleEngine:
         self._production = True
         self._loaded = False
         self._graph: Graph | None = None
+        self._same = self.terms.id(OWL.sameAs)
 
     @classmethod
     def from_files(
@@ -140,7 +142,21 @@ class RuleEngine:
 
     def __contains__(self, triple: object) -> bool:
         ids = tuple(self.terms.find(x) for x in triple) if isinstance(triple, tuple) else ()
+        if len(ids) == 3 and ids[0] == ids[2] and ids[0] is not None and ids[1] == self._same:
+            return self._in_state(ids[0])  # eq-ref, answered rather than stored
         return len(ids) == 3 and ids in self._store
+
+    def _in_state(self, term: int) -> bool:
+        store = self._store
+        return term in store.spo or term in store.pos or term in store.osp
+
+    def conflicts(self) -> tuple[Conflict, ...]:
+        """Return the conflicts that hold now (OWL 2 RL rules with head `false`), sorted.
+
+        Costs what the conflicts are. A conflict goes when one of its triples does.
+        """
+        labels = [c.label for c in self._compiled]
+        return read_conflicts(self.terms, self._store, self._support, labels)
 
     def load(self, triples: Graph | Iterable[Triple] = ()) -> Delta:
         """Assert the initial state (with the ontology) and run the rules to a fixpoint.
@@ -174,6 +190,8 @@ class RuleEngine:
         try:
             self._unassert(minus, notify=True)
             self._assert(plus, None)
+            if not self._loaded:
+                self._infer_axioms()
             self._run_agenda()
         except Exception:
             self._undo()
@@ -232,6 +250,21 @@ class RuleEngine:
                 self._asserted_by[t] = by
             if add(t):
                 queue.append(t)
+        if queue:
+            self._propagate(queue)
+
+    def _infer_axioms(self) -> None:
+        """Infer the heads of rules without a body (OWL RL's axiomatic triples); they never go."""
+        queue = []
+        for compiled in self._compiled:
+            if compiled.rule.body or compiled.production:
+                continue
+            for head in compiled.heads(()):
+                self._support.record(head, compiled.order, ())
+                if head not in self._store:
+                    self._log.touch(head)
+                    self._store.add(head)
+                    queue.append(head)
         if queue:
             self._propagate(queue)
 
