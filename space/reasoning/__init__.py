@@ -1,15 +1,18 @@
 """The reasoning engine: Jena rules and OWL RL, kept up to date incrementally."""
 
 from space.reasoning.builtins import Builtin, Registry, default_registry
+from space.reasoning.conflicts import Conflict
 from space.reasoning.delta import Change, Delta, Firing, Origin, Why
 from space.reasoning.engine import RuleEngine, read_graph
 from space.reasoning.errors import RuleError, RuleLoopError, RuleSyntaxError
+from space.reasoning.owl_profile import UnsupportedAxiom
 from space.reasoning.parser import load_rules, parse_rules
 from space.reasoning.rules import Rule
 
 __all__ = [
     "Builtin",
     "Change",
+    "Conflict",
     "Delta",
     "Firing",
     "Origin",
@@ -19,6 +22,7 @@ __all__ = [
     "RuleError",
     "RuleLoopError",
     "RuleSyntaxError",
+    "UnsupportedAxiom",
     "Why",
     "default_registry",
     "load_rules",
