@@ -29,6 +29,7 @@ from rdflib import OWL, RDF, URIRef
 from rdflib.term import Node
 
 from agents.base import Agent, local_name, run_agent
+from agents.conflicts import ConflictRecords
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
 from agents.ownership import PREFIX, Roster, concerned_robot
 from agents.view import AC
@@ -61,6 +62,7 @@ class Reasoner(Agent):
             prefix += f"{local_name(self.robot)}_"
         self.engine: RuleEngine | None = None
         self.firings = FiringLog(args.keep_firings, prefix)
+        self.conflicts = ConflictRecords()
         self.roster = Roster(self.name) if args.per_robot else None
         self._others: zenoh.Subscriber | None = None
         self._joined: zenoh.LivelinessToken | None = None
@@ -239,8 +241,14 @@ class Reasoner(Agent):
         """
         assert self.ts is not None and self.engine is not None
         inferred_added, inferred_removed = list(delta.inferred_added), list(delta.inferred_removed)
-        if inferred_before is not None:
-            now = set(self.engine.triples(Origin.INFERRED))
+        new_conflicts, gone_conflicts, conflicts = self.conflicts.update(self.engine.conflicts())
+        for conflict in conflicts:
+            self.log.warning("conflict (cause %s): %s", cause, conflict)
+        if inferred_before is None:
+            inferred_added += new_conflicts
+            inferred_removed += gone_conflicts
+        else:
+            now = set(self.engine.triples(Origin.INFERRED)) | self.conflicts.triples()
             inferred_added, inferred_removed = (
                 list(now - inferred_before),
                 list(inferred_before - now),
@@ -327,7 +335,7 @@ class Reasoner(Agent):
         assert self.engine is not None
         try:
             engine = self._build()
-            inferred_before = set(self.engine.triples(Origin.INFERRED))
+            inferred_before = set(self.engine.triples(Origin.INFERRED)) | self.conflicts.triples()
             delta = engine.load(sorted(self.engine.triples(Origin.ASSERTED), key=triple_to_nt))
         except RuleError as exc:
             self.log.error("rules not reloaded, the previous rules stay in force: %s", exc)
