@@ -32,6 +32,7 @@ from space.reasoning.rules import Rule
 from space.reasoning.support import Support
 from space.reasoning.terms import FunctorValue, TermTable
 from space.reasoning.triples import T, TripleStore
+from space.reasoning.view import live_graph
 from space.terms import Triple
 
 
@@ -109,10 +110,20 @@ class RuleEngine:
 
     @property
     def graph(self) -> Graph:
-        """Return the current state (asserted and inferred) as an rdflib Graph; do not modify it."""
+        """Return the current state (asserted and inferred) as a live, read-only rdflib Graph.
+
+        It reads the engine through `match` on every lookup: after an update it
+        shows the new state at once, and reading costs what is read.
+        """
         if self._graph is None:
-            self._graph = _graph(self.triples())
+            self._graph = live_graph(self)
         return self._graph
+
+    def count(self) -> int:
+        """Return how many triples the state holds (asserted and inferred)."""
+        osp, functors = self._store.osp, self.terms.functors
+        hidden = sum(len(ps) for f in functors for ps in osp.get(f, {}).values())
+        return len(self._store) - hidden
 
     def triples(self, origin: Origin | None = None) -> Iterator[Triple]:
         """Yield the current triples, or only the asserted or only the inferred ones."""
@@ -197,7 +208,6 @@ class RuleEngine:
             self._undo()
             raise
         self._loaded = True
-        self._graph = None
         return self._log.delta(tuple(self._firings))
 
     def why(self, triple: Triple) -> Why | None:
@@ -374,7 +384,6 @@ class RuleEngine:
         finally:
             self._production = True
             self._agenda.reset()
-            self._graph = None
 
 
 def read_graph(paths: Iterable[str | Path]) -> Graph:
