@@ -16,7 +16,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Load the ontology and the data, run the rules to a fixpoint, apply the "
         "update, and print the state as Turtle. As in the space, a value of an "
         "owl:FunctionalProperty in the update replaces the asserted old value. "
-        "The production rules that fired are listed on stderr.",
+        "The production rules that fired, and the OWL 2 RL conflicts (triples that cannot all "
+        "hold), are listed on stderr.",
     )
     p.add_argument("--rules", nargs="+", required=True, metavar="RULES", help="rules files")
     p.add_argument("--data", nargs="+", required=True, metavar="DATA", help="RDF data files")
@@ -59,6 +60,8 @@ def run(args: argparse.Namespace) -> int:
                 f"asserted {len(firing.asserted)}",
                 file=sys.stderr,
             )
+    for conflict in engine.conflicts():
+        print(f"# conflict {conflict}", file=sys.stderr)
     origin = {"all": None, "asserted": Origin.ASSERTED, "inferred": Origin.INFERRED}[args.show]
     out = Graph()
     for prefix, namespace in (*ontology.namespaces(), *read_graph(args.data).namespaces()):

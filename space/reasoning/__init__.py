@@ -1,6 +1,7 @@
 """The reasoning engine: Jena rules and OWL RL, kept up to date incrementally."""
 
 from space.reasoning.builtins import Builtin, Registry, default_registry
+from space.reasoning.bulk import read_triples
 from space.reasoning.conflicts import Conflict
 from space.reasoning.delta import Change, Delta, Firing, Origin, Why
 from space.reasoning.engine import RuleEngine, read_graph
@@ -28,4 +29,5 @@ __all__ = [
     "load_rules",
     "parse_rules",
     "read_graph",
+    "read_triples",
 ]
