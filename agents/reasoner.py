@@ -21,6 +21,7 @@ import logging
 import os
 import sys
 import time
+import warnings
 from collections import deque
 from pathlib import Path
 
@@ -35,7 +36,15 @@ from agents.ownership import PREFIX, Roster, concerned_robot
 from agents.view import AC
 from space import Change, SpaceError, Subscription
 from space.heap import refreeze
-from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
+from space.reasoning import (
+    Delta,
+    Firing,
+    Origin,
+    RuleEngine,
+    RuleError,
+    UnsupportedAxiom,
+    read_graph,
+)
 from space.request import Pending
 from space.terms import Triple, triple_to_nt
 
@@ -179,7 +188,15 @@ class Reasoner(Agent):
             RuleError: a rules file is invalid (the message has its line and column).
         """
         self._mtimes = self._stat()
-        return RuleEngine.from_files(rules=self.rules_files, ontology=self.ontology_files)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", UnsupportedAxiom)
+            engine = RuleEngine.from_files(rules=self.rules_files, ontology=self.ontology_files)
+        for w in caught:
+            if issubclass(w.category, UnsupportedAxiom):
+                self.log.warning("ontology: %s", w.message)
+            else:
+                warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+        return engine
 
     def _seed(self) -> None:
         """Write the ontology and the robot file into the space if it lacks them."""
