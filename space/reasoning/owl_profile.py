@@ -11,7 +11,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Iterator
 
-from rdflib import OWL, RDF, Graph
+from rdflib import OWL, RDF, BNode, Graph
 from rdflib.term import Node
 
 from space.reasoning.owl_build import cardinality
@@ -63,4 +63,6 @@ def _name(g: Graph, node: Node) -> str:
     on = g.value(node, OWL.onProperty)
     if on is not None:
         return f"a restriction on {g.namespace_manager.normalizeUri(on)}"
+    if isinstance(node, BNode):
+        return f"an anonymous node (_:{node})"
     return g.namespace_manager.normalizeUri(node)
