@@ -243,13 +243,13 @@ class RuleEngine:
 
     def _assert(self, triples: Iterable[T], by: tuple[int, tuple[T, ...]] | None) -> None:
         """Assert triples and propagate through the monotonic rules."""
-        asserted, touch, journal, present = (
+        asserted, touch, journal, add = (
             self._asserted,
             self._log.touch,
             self._log.journal,
-            self._store.triples,
+            self._store.add,
         )
-        queue: dict[T, None] = {}
+        queue = []
         for t in triples:
             if t in asserted:
                 continue
@@ -258,14 +258,14 @@ class RuleEngine:
             journal.append((True, t, by))
             if by is not None:
                 self._asserted_by[t] = by
-            if t not in present:
-                queue[t] = None
+            if add(t):
+                queue.append(t)
         if queue:
             self._propagate(queue)
 
     def _infer_axioms(self) -> None:
         """Infer the heads of rules without a body (OWL RL's axiomatic triples); they never go."""
-        queue: dict[T, None] = {}
+        queue = []
         for compiled in self._compiled:
             if compiled.rule.body or compiled.production:
                 continue
@@ -273,29 +273,21 @@ class RuleEngine:
                 self._support.record(head, compiled.order, ())
                 if head not in self._store:
                     self._log.touch(head)
-                    queue[head] = None
+                    self._store.add(head)
+                    queue.append(head)
         if queue:
             self._propagate(queue)
 
-    def _propagate(self, pending: dict[T, None]) -> None:
-        """Run the joins each new triple starts until nothing new is derived.
-
-        Semi-naive: a triple enters the store only when its turn comes, so its
-        joins see the triples taken before it, never those still waiting. A
-        derivation is found once, when its last premise is taken, not once per
-        premise added in the same update.
-        """
-        triples, support, ctx = self._store.triples, self._support, self._ctx
-        touch, agenda, add = self._log.touch, self._agenda, self._store.add
+    def _propagate(self, queue: list[T]) -> None:
+        """Run the joins each new triple starts until nothing new is derived."""
+        store, triples, support, ctx = self._store, self._store.triples, self._support, self._ctx
+        touch, agenda = self._log.touch, self._agenda
         starts = self._index.starts
         out: list[Match] = []
-        queue = list(pending)
         position = 0
         while position < len(queue):
-            t = queue[position]
+            s, p, o = queue[position]
             position += 1
-            add(t)
-            s, p, o = t
             for compiled, trigger in starts(p, o):
                 trigger(s, p, o, out)
                 if not out:
@@ -308,9 +300,9 @@ class RuleEngine:
                     for premises, bindings in out:
                         for head in compiled.heads(bindings):
                             support.record(head, compiled.order, premises)
-                            if head not in triples and head not in pending:
+                            if head not in triples:
                                 touch(head)
-                                pending[head] = None
+                                store.add(head)
                                 queue.append(head)
                         for builtin, args in compiled.actions:
                             builtin.act(ctx, args(bindings))
