@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from rdflib import Graph
 from rdflib.store import Store
-from rdflib.term import Node, URIRef
+from rdflib.term import Literal, Node, URIRef
 
 if TYPE_CHECKING:
     from space.reasoning.engine import RuleEngine
@@ -39,6 +39,9 @@ class EngineStore(Store):
         if not (_plain(s) and _plain(p) and _plain(o)):
             raise TypeError("the engine's graph view matches terms or None, not paths or graphs")
         for triple in self._engine.match(s, p, o):
+            # A rule may put a literal where RDF allows none (as in Jena): not in a Graph.
+            if isinstance(triple[0], Literal) or not isinstance(triple[1], URIRef):
+                continue
             yield triple, iter(())  # type: ignore[misc]
 
     def __len__(self, context: Any = None) -> int:
