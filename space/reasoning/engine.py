@@ -69,7 +69,7 @@ class RuleEngine:
             check_rule(rule)
         runnable = [value_patterns(r, self.registry) for r in self.rules]
         tbox = ontology if isinstance(ontology, Graph) else _graph(ontology or ())
-        self.terms = TermTable() if terms is None else terms  # shared by the two layers of a HybridEngine
+        self.terms = TermTable() if terms is None else terms  # HybridEngine: shared
         self._store = TripleStore()
         self._ctx = Context(self.terms, self._store, printer)
         compiler = JoinCompiler(self.terms, self._store, self._ctx)
