@@ -15,7 +15,7 @@ from collections import OrderedDict
 from collections.abc import Iterable
 from typing import Any
 
-from rdflib import Graph, Literal
+from rdflib import RDF, Graph, Literal
 from rdflib.term import Node
 
 from agents.sentences import firing_sentence
@@ -67,6 +67,13 @@ class History:
             while len(self._causes) > CAUSES_KEPT:
                 self._causes.popitem(last=False)
             when = cs.time.timestamp() * 1000 if cs.time else time.time() * 1000
+            # A space started afresh (`tspace up --fresh`, a scenario) removes its robots:
+            # what came before is another story, and the page starts the robot's history again.
+            out += [
+                {"t": when, "seq": cs.seq, "robot": _local(s), "kind": "reset"}
+                for s, p, o in cs.removed
+                if p == RDF.type and o == AC.Robot
+            ]
             out += self._values(cs, graph, owner, robots, when)
             out += self._firings(cs, graph, owner, when)
         return out

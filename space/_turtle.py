@@ -19,8 +19,10 @@ from rdflib import Graph, Literal
 from space.errors import InputError
 
 
-def read_turtle(source: str) -> Graph:
+def read_turtle(source: str, base: str | None = None) -> Graph:
     """Parse a Turtle file (or `-` for standard input) into a graph.
+
+    `base` resolves relative IRIs (rdflib's default when None).
 
     Raises:
         InputError: the file is missing, binary, not UTF-8, or not valid Turtle
@@ -38,15 +40,15 @@ def read_turtle(source: str) -> Graph:
     except UnicodeDecodeError as exc:
         line = data[: exc.start].count(b"\n") + 1
         raise InputError(f"{name}: line {line}: not UTF-8 text (byte {exc.start})") from exc
-    return parse_turtle(text, name)
+    return parse_turtle(text, name, base)
 
 
-def parse_turtle(text: str, name: str = "<string>") -> Graph:
+def parse_turtle(text: str, name: str = "<string>", base: str | None = None) -> Graph:
     """Parse Turtle text; see `read_turtle`."""
     graph = Graph()
     try:
         with _quiet("rdflib.term"):
-            graph.parse(data=text.removeprefix("\ufeff"), format="turtle")
+            graph.parse(data=text.removeprefix("\ufeff"), format="turtle", publicID=base)
     except Exception as exc:  # rdflib's parser raises BadSyntax and assorted others
         raise InputError(f"{name}: bad Turtle: {_one_line(exc)}") from exc
     for _s, _p, o in graph:

@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 
-from conftest import Server, tspace_cmd
+from conftest import REPO, Server, tspace_cmd
 
 ROBOT = "@prefix ac: <https://w3id.org/tspace/selfconfig#> .\nac:robot1 ac:battery_level 'low' .\n"
 
@@ -122,3 +122,37 @@ def test_version_and_every_commands_help():
     assert out.returncode == 0 and out.stdout.startswith("usage: tspace agent reasoner "), (
         out.stdout
     )
+
+
+def test_tspace_reason_says_bad_data_in_one_line(tmp_path):
+    rules = "rules/paper.rules"
+    cases = {
+        "bad.ttl": (b"<urn:a> <urn:b> <urn:c>\n<urn:d> <urn:e> .\n", "bad Turtle: line 2: "),
+        "binary.ttl": (bytes(range(256)), "a binary file, not Turtle text"),
+        "typed.ttl": (
+            b'<urn:a> <urn:b> "x"^^<http://www.w3.org/2001/XMLSchema#integer> .\n',
+            "line 1: literal 'x' is not a valid xsd:integer",
+        ),
+    }
+    for name, (data, message) in cases.items():
+        (tmp_path / name).write_bytes(data)
+        out = subprocess.run(
+            tspace_cmd("reason", "--rules", str(REPO / rules), "--data", str(tmp_path / name)),
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert out.returncode == 1, (name, out.stderr)
+        assert out.stderr == f"tspace reason: {tmp_path / name}: {message}" + (
+            out.stderr.split(message, 1)[1] if message.endswith(": ") else "\n"
+        ), (name, out.stderr)
+        assert len(out.stderr.splitlines()) == 1, (name, out.stderr)
+
+
+def test_rules_check_refuses_a_file_without_rules(tmp_path):
+    empty = tmp_path / "empty.rules"
+    empty.write_text("# nothing yet\n@prefix ac: <https://w3id.org/tspace/selfconfig#>.\n")
+    out = tspace("rules", "check", str(empty), str(REPO / "rules" / "paper.rules"))
+    assert out.returncode == 1
+    assert out.stderr == f"{empty}: no rules in it\n"
+    assert "paper.rules: 3 rules" in out.stdout  # the other files are still checked

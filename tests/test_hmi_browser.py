@@ -8,9 +8,13 @@ Screenshots of the scenario at 1024 and 1920 px go to bench/out/ (for the docs).
 from __future__ import annotations
 
 import base64
+import contextlib
 import itertools
 import json
+import os
 import shutil
+import signal
+import socket
 import subprocess
 import time
 import urllib.error
@@ -84,23 +88,35 @@ class Browser:
             start_new_session=True,
         )
         self._ids = itertools.count(1)
-        port_file = profile / "DevToolsActivePort"
-        wait_for(lambda: port_file.is_file() and port_file.read_text().strip(), 30, "Chromium")
-        port = int(port_file.read_text().split()[0])
-        page = wait_for(lambda: self._page(port), 10, "Chromium's page")
-        self.ws = websocket.create_connection(page, timeout=10, suppress_origin=True)
+        try:
+            port_file = profile / "DevToolsActivePort"
+            wait_for(lambda: port_file.is_file() and port_file.read_text().strip(), 30, "Chromium")
+            port = int(port_file.read_text().split()[0])
+            page = wait_for(lambda: self._page(port), 30, "Chromium's page")
+            self.ws = websocket.create_connection(page, timeout=10, suppress_origin=True)
+        except BaseException:
+            self.close()  # a browser that never answered is still a process group to end
+            raise
 
     @staticmethod
     def _page(port: int) -> str | None:
-        with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=2) as reply:
-            targets = json.load(reply)
+        try:
+            with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=2) as reply:
+                targets = json.load(reply)
+        except OSError:
+            return None  # Chromium still starting (slow on a loaded machine): asked again
+
         return next((t["webSocketDebuggerUrl"] for t in targets if t["type"] == "page"), None)
 
     def close(self) -> None:
-        if hasattr(self, "ws"):
-            self.ws.close()
-        self.proc.kill()
-        self.proc.wait()
+        try:
+            if hasattr(self, "ws"):
+                self.ws.close()
+        finally:
+            # Chromium's renderer and zygote processes share its session: end them all.
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
 
     def call(self, method: str, **params: object) -> dict:
         """Send one DevTools command and return its result (events in between are skipped)."""
@@ -389,6 +405,9 @@ def test_a_cross_origin_post_is_refused_and_changes_nothing(page, deployment):
     assert post(f"{base}/api/battery", body, {**good, "Host": "evil.example"}) == 403
     with TripleSpace.open(f"tcp/127.0.0.1:{deployment.port}", space="ward") as ts:
         assert value(ts, AC.robot1_battery, AC.battery_level) == Literal("normal")
+    # The HMI serves this machine only (127.0.0.1), unless `--hmi-listen` says otherwise.
+    with pytest.raises(ConnectionRefusedError):
+        socket.create_connection(("127.0.0.2", deployment.hmi_port), timeout=5).close()
     # The page's own request, with its session's token and Origin, goes through.
     assert post(f"{base}/api/battery", body, good) == 200
     with TripleSpace.open(f"tcp/127.0.0.1:{deployment.port}", space="ward") as ts:

@@ -10,8 +10,11 @@ completed run, and a plain `tspace up` then resumes the robot, idle.
 
 from __future__ import annotations
 
+import json
 import signal
+import urllib.request
 
+import pytest
 from test_scenario_battery import HOSPITAL, STEPS, completed_steps, needs_reasoner
 from uprun import Up, alive
 
@@ -23,6 +26,7 @@ def gone(up: Up) -> bool:
 
 
 @needs_reasoner
+@pytest.mark.timeout(900)  # eleven runs of tspace up: minutes on a busy machine
 def test_the_scenario_reruns_after_an_interrupt_at_every_step(tmp_path):
     for step in range(1, len(STEPS) + 1):
         with Up(tmp_path, HOSPITAL, "--scenario", "battery") as up:
@@ -58,3 +62,19 @@ def test_the_scenario_reruns_after_an_interrupt_at_every_step(tmp_path):
         wait_for(lambda: up.stderr_has("resuming from them"), 30, "the resume", up.logs)
         wait_for(lambda: up.stdout_has("robot1: task Idle"), 30, "the robot to idle", up.logs)
         assert not up.stderr_has("started afresh")
+        # The HMI rebuilt the robot's history from the store's log: the last run, after the
+        # reset that started it (the page starts the robot's history again there).
+        url = f"http://127.0.0.1:{up.hmi_port}/api/history"
+
+        def history_read() -> bool:
+            try:
+                with urllib.request.urlopen(url, timeout=5) as reply:
+                    return b'"firing"' in reply.read()
+            except OSError:
+                return False  # the HMI is still starting
+
+        wait_for(history_read, 60, "the HMI's history", up.logs)
+        with urllib.request.urlopen(url, timeout=5) as reply:
+            kinds = [e["kind"] for e in json.load(reply) if e["robot"] == "robot1"]
+        last_run = kinds[len(kinds) - kinds[::-1].index("reset") :]
+        assert {"battery", "task", "firing"} <= set(last_run), last_run

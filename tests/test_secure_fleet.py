@@ -15,6 +15,7 @@ import urllib.error
 import urllib.request
 
 import pytest
+from hmipage import hmi_post
 from rdflib import Literal, Namespace
 from uprun import Up
 
@@ -34,17 +35,8 @@ def robots_shown(port: int) -> dict[str, dict]:
 
 
 def post(port: int, path: str, body: dict) -> int:
-    """POST to the HMI; return the HTTP status."""
-    request = urllib.request.Request(
-        f"http://127.0.0.1:{port}{path}",
-        data=json.dumps(body).encode(),
-        headers={"Content-Type": "application/json"},
-    )
-    try:
-        with urllib.request.urlopen(request, timeout=10) as reply:
-            return reply.status
-    except urllib.error.HTTPError as exc:
-        return exc.code
+    """POST to the HMI as its page does; return the HTTP status."""
+    return hmi_post(port, path, body)[0]
 
 
 @pytest.mark.parametrize("reasoners", ["one for the fleet", "one per robot"])

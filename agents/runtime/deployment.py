@@ -46,6 +46,7 @@ class Options:
     listen: list[str]
     data: Path
     hmi_port: int | None = None
+    hmi_listen: str | None = None  # the HMI's address (the launch file's, else 127.0.0.1)
     scenario: Scenario | None = None
     once: bool = False
     step_timeout: float = 90.0
@@ -122,11 +123,17 @@ class Deployment:
         args = list(agent.args)
         if self.hmi_port is not None and agent.module == "agents.hmi":
             args = _set_option(args, "--http-port", str(self.hmi_port))
+            if self.options.hmi_listen:
+                args = _set_option(args, "--http-host", self.options.hmi_listen)
         return (*argv, *args)
 
     def hmi_url(self) -> str | None:
         """Return the URL of the HMI agent's page, once `run` chose its port."""
-        return None if self.hmi_port is None else f"http://127.0.0.1:{self.hmi_port}/"
+        if self.hmi_port is None:
+            return None
+        host = self.options.hmi_listen or "127.0.0.1"
+        host = "127.0.0.1" if host in ("0.0.0.0", "::") else host
+        return f"http://{f'[{host}]' if ':' in host else host}:{self.hmi_port}/"
 
     def run(self) -> int:
         """Start everything, show it until stopped, stop everything; return the exit code.
@@ -143,7 +150,9 @@ class Deployment:
         check_can_listen(self.options.listen)
         hmi = self.hmi_agent()
         if hmi is not None:
-            self.hmi_port = choose_port(hmi, self.options.hmi_port, self.view.event)
+            self.hmi_port = choose_port(
+                hmi, self.options.hmi_port, self.view.event, self.options.hmi_listen
+            )
         previous = {
             sig: signal.signal(sig, self._on_signal) for sig in (signal.SIGINT, signal.SIGTERM)
         }

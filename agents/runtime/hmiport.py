@@ -25,18 +25,24 @@ def port_free(host: str, port: int) -> bool:
     return True
 
 
-def choose_port(agent: AgentSpec, named: int | None, report: Callable[[str], None]) -> int:
+def choose_port(
+    agent: AgentSpec,
+    named: int | None,
+    report: Callable[[str], None],
+    host: str | None = None,
+) -> int:
     """Return the port the HMI agent will serve on.
 
     Args:
         agent: the HMI agent of the launch file (its `--http-port`, `--http-host`).
         named: the port given to `tspace up --hmi-port`, which wins over the file.
         report: told when the default port is taken and another one is used.
+        host: the address given to `tspace up --hmi-listen`, which wins over the file.
 
     Raises:
         InputError: the port `--hmi-port` or the launch file names is taken, or not a number.
     """
-    host = agent.option("--http-host") or DEFAULT_HOST
+    host = host or agent.option("--http-host") or DEFAULT_HOST
     source = "--hmi-port"
     if named is None and agent.option("--http-port") is not None:
         source = f"--http-port of agent {agent.name} in the launch file"

@@ -41,6 +41,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--hmi-port", type=int, metavar="PORT", help="HTTP port of the HMI (overrides the file)"
     )
     p.add_argument(
+        "--hmi-listen",
+        metavar="HOST",
+        help="address the HMI serves on (default 127.0.0.1: this machine only; 0.0.0.0: every "
+        "interface, for a tablet on the ward's network)",
+    )
+    p.add_argument(
         "--fresh",
         action="store_true",
         help="start the space from the launch file's state (default: resume where it was; "
@@ -106,6 +112,7 @@ def run(args: argparse.Namespace) -> int:
         once=args.once,
         step_timeout=args.step_timeout,
         fresh=args.fresh,
+        hmi_listen=args.hmi_listen,
         secure=args.secure,
         policy=args.policy or (shipped(POLICY) if args.secure else None),
     )

@@ -36,6 +36,10 @@ def run_check(args: argparse.Namespace) -> int:
             print(exc, file=sys.stderr)
             failed += 1
             continue
+        if not rules:  # an empty file (or one of comments) is a mistake, not a rule base
+            print(f"{path}: no rules in it", file=sys.stderr)
+            failed += 1
+            continue
         print(f"{path}: {len(rules)} rule{'' if len(rules) == 1 else 's'}")
         for rule in rules:
             calls = [i for i in (*rule.body, *rule.head) if isinstance(i, Call)]

@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
         cs = ts.changeset(
             added if added is not None else (), removed if removed is not None else ()
         )
-        big = len(cs.added) + len(cs.removed) >= 10_000
+        big = any(_size(source) >= PROGRESS_BYTES for source in (args.file, args.remove))
         if big:
             _say(f"sending one changeset of {len(cs.added) + len(cs.removed)} triples…")
         print(ts.send(cs, timeout=args.timeout), file=sys.stdout)
@@ -65,7 +65,7 @@ def _read(source: str) -> Graph:
     """Parse a document, saying what it does on stderr when it is big."""
     from space._turtle import read_turtle
 
-    size = os.path.getsize(source) if source != "-" and os.path.isfile(source) else 0
+    size = _size(source)
     if size < PROGRESS_BYTES:
         return read_turtle(source)
     _say(f"reading {source} ({size / 1e6:.1f} MB)…")
@@ -73,6 +73,11 @@ def _read(source: str) -> Graph:
     graph = read_turtle(source)
     _say(f"{len(graph)} triples read in {time.monotonic() - started:.1f} s")
     return graph
+
+
+def _size(source: str | None) -> int:
+    """Return a document's size in bytes (0 for stdin or nothing)."""
+    return os.path.getsize(source) if source and source != "-" and os.path.isfile(source) else 0
 
 
 def _say(line: str) -> None:

@@ -13,15 +13,17 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 
-from rdflib import BNode, Graph, URIRef
+from rdflib import OWL, BNode, Graph, URIRef
 from rdflib.term import Node
 
+from space._turtle import read_turtle
 from space.errors import InputError
 from space.reasoning.agenda import Agenda
 from space.reasoning.builtins import Context, Registry, default_registry
 from space.reasoning.changes import ChangeLog
 from space.reasoning.checks import check_rule, mark_shared_names
 from space.reasoning.compile import CompiledRule, RuleIndex
+from space.reasoning.conflicts import Conflict, read_conflicts
 from space.reasoning.delta import Delta, Firing, Origin, Why
 from space.reasoning.errors import RuleError, RuleLoopError, unreadable
 from space.reasoning.forms import value_patterns
@@ -32,6 +34,7 @@ from space.reasoning.rules import Rule
 from space.reasoning.support import Support
 from space.reasoning.terms import FunctorValue, TermTable
 from space.reasoning.triples import T, TripleStore
+from space.reasoning.view import live_graph
 from space.terms import Triple
 
 
@@ -89,6 +92,7 @@ class RuleEngine:
         self._production = True
         self._loaded = False
         self._graph: Graph | None = None
+        self._same = self.terms.id(OWL.sameAs)
 
     @classmethod
     def from_files(
@@ -109,10 +113,20 @@ class RuleEngine:
 
     @property
     def graph(self) -> Graph:
-        """Return the current state (asserted and inferred) as an rdflib Graph; do not modify it."""
+        """Return the current state (asserted and inferred) as a live, read-only rdflib Graph.
+
+        It reads the engine through `match` on every lookup: after an update it
+        shows the new state at once, and reading costs what is read.
+        """
         if self._graph is None:
-            self._graph = _graph(self.triples())
+            self._graph = live_graph(self)
         return self._graph
+
+    def count(self) -> int:
+        """Return how many triples the state holds (asserted and inferred)."""
+        osp, functors = self._store.osp, self.terms.functors
+        hidden = sum(len(ps) for f in functors for ps in osp.get(f, {}).values())
+        return len(self._store) - hidden
 
     def triples(self, origin: Origin | None = None) -> Iterator[Triple]:
         """Yield the current triples, or only the asserted or only the inferred ones."""
@@ -142,7 +156,21 @@ class RuleEngine:
 
     def __contains__(self, triple: object) -> bool:
         ids = tuple(self.terms.find(x) for x in triple) if isinstance(triple, tuple) else ()
+        if len(ids) == 3 and ids[0] == ids[2] and ids[0] is not None and ids[1] == self._same:
+            return self._in_state(ids[0])  # eq-ref, answered rather than stored
         return len(ids) == 3 and ids in self._store
+
+    def _in_state(self, term: int) -> bool:
+        store = self._store
+        return term in store.spo or term in store.pos or term in store.osp
+
+    def conflicts(self) -> tuple[Conflict, ...]:
+        """Return the conflicts that hold now (OWL 2 RL rules with head `false`), sorted.
+
+        Costs what the conflicts are. A conflict goes when one of its triples does.
+        """
+        labels = [c.label for c in self._compiled]
+        return read_conflicts(self.terms, self._store, self._support, labels)
 
     def load(self, triples: Graph | Iterable[Triple] = ()) -> Delta:
         """Assert the initial state (with the ontology) and run the rules to a fixpoint.
@@ -192,7 +220,6 @@ class RuleEngine:
             self._undo()
             raise
         self._loaded = True
-        self._graph = None
         return self._log.delta(tuple(self._firings))
 
     def _apply_monotonic(self, plus: list[T], minus: list[T]) -> Delta:
@@ -394,7 +421,6 @@ class RuleEngine:
         finally:
             self._production = True
             self._agenda.reset()
-            self._graph = None
 
 
 def read_graph(paths: Iterable[str | Path]) -> Graph:
@@ -405,6 +431,15 @@ def read_graph(paths: Iterable[str | Path]) -> Graph:
     """
     graph = Graph()
     for path in paths:
+        if _format(Path(path)) == "turtle":
+            # One-line errors with file and line (binary, not UTF-8, ill-typed literals too).
+            try:
+                graph += read_turtle(str(path), base=Path(path).resolve().as_uri())
+            except InputError as exc:
+                if isinstance(exc.__cause__, OSError):  # said as every unreadable file is
+                    raise InputError(unreadable(path, exc.__cause__)) from exc.__cause__
+                raise
+            continue
         try:
             # Opened here, not by rdflib, which names a missing relative path by a wrong
             # absolute one; the base for relative IRIs stays the file's own IRI.
