@@ -20,6 +20,7 @@ from rdflib import Graph
 from rdflib.term import Node
 
 from space.reasoning.builtins import Registry, default_registry
+from space.reasoning.conflicts import Conflict
 from space.reasoning.delta import Delta, Origin, TripleChange, Why
 from space.reasoning.engine import RuleEngine, read_graph
 from space.reasoning.parser import load_rules
@@ -82,6 +83,14 @@ class HybridEngine:
 
     def __contains__(self, triple: object) -> bool:
         return triple in self.backward
+
+    def count(self) -> int:
+        """Return how many triples the state holds (asserted and inferred)."""
+        return self.backward.count()
+
+    def conflicts(self) -> tuple[Conflict, ...]:
+        """Return the OWL 2 RL conflicts that hold now (the ontology is the forward layer's)."""
+        return self.forward.conflicts()
 
     def load(self, triples: Graph | Iterable[Triple] = ()) -> Delta:
         """Assert the initial state and run both layers (see `RuleEngine.load`)."""
