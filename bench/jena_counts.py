@@ -32,9 +32,9 @@ def main(root: Path) -> None:
     logging.disable(logging.CRITICAL)
     from rdflib import Graph
     from rdflib.compare import isomorphic
-    from rdflib.util import from_n3
+    from rdflib.util import from_n3, guess_format
 
-    from space.reasoning import RuleEngine, default_registry, load_rules, parse_rules, read_graph
+    from space.reasoning import RuleEngine, default_registry, load_rules, parse_rules
 
     registry = default_registry()
     quiet = {"warn": lambda m: None} if "warn" in inspect.signature(load_rules).parameters else {}
@@ -57,7 +57,11 @@ def main(root: Path) -> None:
     def closure(rules: Path, data: list[Path]) -> Graph | None:
         try:
             run = engine(rules)
-            run.load(read_graph(data))
+            graph = Graph()
+            for path in data:  # the referee's fixed base, as tests/test_jena_conformance.py
+                kind = guess_format(str(path)) or "turtle"
+                graph.parse(path, format=kind, publicID="http://jena.test/data/" + path.name)
+            run.load(graph)
         except Exception:  # as above: no answer
             return None
         return run.graph

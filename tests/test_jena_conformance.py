@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from rdflib import BNode, Graph
 from rdflib.compare import isomorphic
-from rdflib.util import from_n3
+from rdflib.util import from_n3, guess_format
 
 from space.reasoning import (
     RuleEngine,
@@ -25,7 +25,6 @@ from space.reasoning import (
     default_registry,
     load_rules,
     parse_rules,
-    read_graph,
 )
 from space.reasoning.hybrid import HybridEngine, mixes_forms
 
@@ -195,9 +194,20 @@ def _engine(rules: Path) -> RuleEngine | HybridEngine:
     return kind(loaded, owl=False)
 
 
+BASE = "http://jena.test/data/"  # as the referee reads the data, wherever the checkout is
+
+
+def _read(paths: list[Path]) -> Graph:
+    """Read Jena's test data with the base the referee used (relative IRIs resolve alike)."""
+    graph = Graph()
+    for path in paths:
+        graph.parse(path, format=guess_format(str(path)) or "turtle", publicID=BASE + path.name)
+    return graph
+
+
 def _run(rules: Path, data: list[Path]) -> Graph:
     engine = _engine(rules)
-    engine.load(read_graph(data))
+    engine.load(_read(data))
     return engine.graph
 
 
