@@ -45,14 +45,15 @@ def run(args: argparse.Namespace) -> int:
     from rdflib import OWL, RDF, Graph, Literal, URIRef
 
     from space.functional import replace_functional
-    from space.reasoning import Origin, RuleEngine, read_graph
+    from space.reasoning import Origin, read_graph
+    from space.reasoning.hybrid import engine_from_files
 
     ontology = read_graph(args.ontology)
 
     def to_stderr(text: str) -> None:
         print(text, file=sys.stderr)
 
-    engine = RuleEngine.from_files(
+    engine = engine_from_files(
         rules=args.rules,
         ontology=args.ontology,
         owl=bool(args.ontology) and not args.no_owl,

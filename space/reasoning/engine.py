@@ -64,6 +64,7 @@ class RuleEngine:
         owl: bool = True,
         max_firings: int = 10_000,
         printer: Callable[[str], None] = print,
+        terms: TermTable | None = None,
     ) -> None:
         self.registry = registry or default_registry()
         self.rules = tuple(mark_shared_names(rules))
@@ -71,7 +72,7 @@ class RuleEngine:
             check_rule(rule)
         runnable = [value_patterns(r, self.registry) for r in self.rules]
         tbox = ontology if isinstance(ontology, Graph) else _graph(ontology or ())
-        self.terms = TermTable()
+        self.terms = TermTable() if terms is None else terms  # HybridEngine: shared
         self._store = TripleStore()
         self._ctx = Context(self.terms, self._store, printer)
         compiler = JoinCompiler(self.terms, self._store, self._ctx)
@@ -196,8 +197,10 @@ class RuleEngine:
                 caller's triples and what the monotonic rules draw from them are kept,
                 and the error's `kept` is that net change, to publish like any delta.
         """
-        plus = [self._encode(t) for t in added]
-        minus = [self._encode(t) for t in removed]
+        return self._apply_ids([self._encode(t) for t in added], [self._encode(t) for t in removed])
+
+    def _apply_ids(self, plus: list[T], minus: list[T]) -> Delta:
+        """`apply` on encoded triples (a HybridEngine passes its forward layer's changes)."""
         if not self._loaded:
             plus = self._ontology + plus
         self._log.begin(plus, minus)
