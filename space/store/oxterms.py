@@ -1,0 +1,133 @@
+"""Wire terms (N-Triples texts) <-> pyoxigraph terms: the store's one term conversion.
+
+Every term that enters the store is checked here (a valid IRI, literal or
+blank node label, within `MAX_TERM` characters), so nothing invalid reaches
+the database: an IRI such as `<http://a b>` is refused at the edge instead of
+breaking every later CONSTRUCT of its space.
+
+Blank nodes are stored skolemized, as `urn:tspace:bnode:<label>` IRIs: SPARQL
+UPDATE (the one atomic call that both removes and adds) cannot name a stored
+blank node, so a blank node must be an IRI inside the database. Every answer
+turns those IRIs back into `_:<label>`.
+"""
+
+from __future__ import annotations
+
+import re
+from functools import lru_cache
+
+import pyoxigraph as ox
+
+from space.errors import MalformedPayload
+
+OxTerm = ox.NamedNode | ox.BlankNode | ox.Literal
+OxTriple = tuple[OxTerm, OxTerm, OxTerm]
+
+MAX_TERM = 16_384  # characters of one term's N-Triples text (docs/wire-format.md)
+SKOLEM = "urn:tspace:bnode:"
+XSD_STRING = "http://www.w3.org/2001/XMLSchema#string"
+_CACHED = 8192
+
+_LITERAL_RE = re.compile(
+    r'^"((?:[^"\\\n\r]|\\.)*)"(?:\^\^<([^<>"{}|^`\\\x00-\x20]*)>|@([A-Za-z]+(?:-[A-Za-z0-9]+)*))?$',
+    re.S,
+)
+_IRI_RE = re.compile(r'^<([^<>"{}|^`\\\x00-\x20]*)>$')
+_BNODE_RE = re.compile(r"^_:([A-Za-z0-9_](?:[A-Za-z0-9_.\-]*[A-Za-z0-9_\-])?)$")
+_UNESCAPE_RE = re.compile(r'\\(u[0-9A-Fa-f]{4}|U[0-9A-Fa-f]{8}|[tbnrf"\'\\])')
+_SIMPLE = {"t": "\t", "b": "\b", "n": "\n", "r": "\r", "f": "\f", '"': '"', "'": "'", "\\": "\\"}
+
+
+def _unescape(text: str) -> str:
+    if "\\" not in text:
+        return text
+    rest = _UNESCAPE_RE.sub("", text)
+    if "\\" in rest:
+        raise MalformedPayload(f"bad escape in literal {text[:80]!r}")
+
+    def one(match: re.Match[str]) -> str:
+        code = match.group(1)
+        if code[0] in "uU":
+            point = int(code[1:], 16)
+            if point > 0x10FFFF or 0xD800 <= point <= 0xDFFF:
+                raise MalformedPayload(f"bad code point escape \\{code}")
+            return chr(point)
+        return _SIMPLE[code]
+
+    return _UNESCAPE_RE.sub(one, text)
+
+
+@lru_cache(maxsize=_CACHED)
+def term(text: object) -> OxTerm:
+    """Return the pyoxigraph term of one N-Triples term text.
+
+    Raises:
+        MalformedPayload: not a string, too long, or not a valid IRI, literal or blank node.
+    """
+    if not isinstance(text, str) or not text:
+        raise MalformedPayload(f"a term is a non-empty N-Triples string, got {_short(text)}")
+    if len(text) > MAX_TERM:
+        raise MalformedPayload(f"a term is at most {MAX_TERM} characters, got {len(text)}")
+    try:
+        first = text[0]
+        if first == "<":
+            match = _IRI_RE.match(text)
+            if match is None:
+                raise MalformedPayload(f"not an N-Triples IRI: {_short(text)}")
+            return ox.NamedNode(match.group(1))
+        if first == '"':
+            match = _LITERAL_RE.match(text)
+            if match is None:
+                raise MalformedPayload(f"not an N-Triples literal: {_short(text)}")
+            lexical, datatype, lang = match.groups()
+            value = _unescape(lexical)
+            if lang:
+                return ox.Literal(value, language=lang)
+            if datatype and datatype != XSD_STRING:
+                return ox.Literal(value, datatype=ox.NamedNode(datatype))
+            return ox.Literal(value)
+        match = _BNODE_RE.match(text)
+        if match is not None:
+            return ox.NamedNode(SKOLEM + match.group(1))
+    except ValueError as exc:  # pyoxigraph's verdict on an IRI or a language tag
+        raise MalformedPayload(f"invalid RDF term {_short(text)}: {exc}") from None
+    raise MalformedPayload(f"not an N-Triples term: {_short(text)}")
+
+
+def triple(parts: object) -> OxTriple:
+    """Return the pyoxigraph triple of a `[s, p, o]` list of N-Triples texts.
+
+    Raises:
+        MalformedPayload: not three terms, a literal as subject, or a predicate that is not an IRI.
+    """
+    if not isinstance(parts, list | tuple) or len(parts) != 3:
+        raise MalformedPayload(f"a triple is a list of three terms, got {_short(parts)}")
+    s, p, o = term(parts[0]), term(parts[1]), term(parts[2])
+    if isinstance(s, ox.Literal) or not isinstance(p, ox.NamedNode) or p.value.startswith(SKOLEM):
+        raise MalformedPayload(f"not a valid RDF triple: {_short(parts)}")
+    return s, p, o
+
+
+@lru_cache(maxsize=_CACHED)
+def text(node: OxTerm) -> str:
+    """Return the N-Triples text of a stored term (skolem IRIs back as blank nodes)."""
+    if isinstance(node, ox.NamedNode) and node.value.startswith(SKOLEM):
+        return "_:" + node.value[len(SKOLEM) :]
+    if isinstance(node, ox.BlankNode):
+        return "_:" + node.value
+    return str(node)
+
+
+def triple_text(t: OxTriple) -> list[str]:
+    """Return the `[s, p, o]` N-Triples texts of a stored triple."""
+    return [text(t[0]), text(t[1]), text(t[2])]
+
+
+def sparql(node: OxTerm) -> str:
+    """Return a term as SPARQL text (skolem IRIs stay IRIs: that is what the database holds)."""
+    return str(node)
+
+
+def _short(value: object) -> str:
+    shown = repr(value)
+    return shown if len(shown) <= 120 else shown[:117] + "..."
