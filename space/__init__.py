@@ -1,12 +1,15 @@
 """tspace: a distributed triple space on Eclipse Zenoh."""
 
+from space.ack import Ack, Dropped
 from space.changeset import Changeset
 from space.client import Transaction, TripleSpace
 from space.errors import (
     ChangesetRejected,
     InputError,
     MalformedPayload,
+    NotApplied,
     QueryError,
+    QueryTimeLimit,
     SpaceError,
     SpaceTimeout,
     SpaceUnavailable,
@@ -16,12 +19,16 @@ from space.subscription import Change, Subscription
 from space.template import Template
 
 __all__ = [
+    "Ack",
     "Change",
     "Changeset",
     "ChangesetRejected",
+    "Dropped",
     "InputError",
     "MalformedPayload",
+    "NotApplied",
     "QueryError",
+    "QueryTimeLimit",
     "SpaceError",
     "SpaceTimeout",
     "SpaceUnavailable",

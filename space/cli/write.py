@@ -17,10 +17,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "write",
         help="write a Turtle document into the space",
         description="Write the triples of a Turtle document (- for stdin) as one changeset; "
-        "with --remove, remove those of another in the same changeset. Prints the changeset id.",
+        "with --remove, remove those of another in the same changeset. Prints the changeset id; "
+        "each added triple the store did not apply (a functional property holding a newer value) "
+        "is printed on stderr with its reason, and with --strict makes the exit code 1.",
     )
     p.add_argument("file", nargs="?", metavar="FILE|-", help="Turtle document to add")
     p.add_argument("--remove", metavar="FILE|-", help="Turtle document whose triples to remove")
+    p.add_argument("--strict", action="store_true", help="exit 1 when some triple was not applied")
     add_connect(p)
     p.set_defaults(func=run)
 
@@ -37,5 +40,9 @@ def run(args: argparse.Namespace) -> int:
         cs = ts.changeset(
             added if added is not None else (), removed if removed is not None else ()
         )
-        print(ts.send(cs, timeout=args.timeout), file=sys.stdout)
-    return 0
+        ack = ts.send(cs, timeout=args.timeout, strict=False)
+        print(ack, file=sys.stdout)
+    for dropped in ack.dropped:
+        s, p, o = (term.n3() for term in dropped.triple)
+        print(f"tspace: not applied: {s} {p} {o} .: {dropped.reason}", file=sys.stderr)
+    return 1 if ack.dropped and args.strict else 0

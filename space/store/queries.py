@@ -17,8 +17,9 @@ import zenoh
 
 from space import keys
 from space.changeset import pack
-from space.errors import MalformedPayload, QueryError
+from space.errors import MalformedPayload, QueryError, QueryTimeLimit
 from space.prefixes import PrefixMap
+from space.request import TIME_LIMIT
 from space.store import oxterms
 from space.store.db import META, SEQ, StoreDB, graph, space_node
 from space.store.intake import QueryRequest
@@ -29,14 +30,10 @@ _XSD_STRING = oxterms.XSD_STRING
 _S, _P, _O = (ox.Variable(v) for v in "spo")
 
 
-class QueryTimeLimit(QueryError):
-    """A read ran past its time limit (the message names the limit)."""
-
-
 def time_limit_message(limit: float) -> str:
     """Return the one error a caller gets when its read runs past `limit` seconds."""
     return (
-        f"time limit: the query ran past its time limit of {limit:g} s and was abandoned "
+        f"{TIME_LIMIT}the query ran past its time limit of {limit:g} s and was abandoned "
         "(a request's 'limit', at most tspace serve --query-timeout)"
     )
 
