@@ -235,7 +235,7 @@ class TripleSpace:
 
     def _ask(self, request: dict, timeout: float) -> dict:
         # The store gives up a little before the caller does, so the caller hears why.
-        request["limit"] = max(0.05, timeout * 0.95)
+        request["limit"] = max(0.05, timeout - max(0.1, min(1.0, timeout * 0.1)))
         return ask_store(self.session, self._key("query"), pack(request), timeout, what="query")
 
     def _template(self, template: TemplateLike) -> Template:
