@@ -22,6 +22,7 @@ commit returns.
 from __future__ import annotations
 
 import base64
+import gc
 import logging
 import time
 from collections.abc import Iterable, Iterator
@@ -112,19 +113,32 @@ class StoreDB:
     Writes (`commit`, `replace`) come from one thread; reads may come from any
     thread, each call reading one consistent snapshot.
 
+    A database that cannot be opened for writing (a read-only directory) is
+    opened read-only, with `open_error` saying why: the store then serves reads
+    and refuses writes until `probe` succeeds.
+
     Raises:
         DataDirInUse: another process holds the directory.
         OldDataDir: (from `migrate`) an old SQLite directory that was not migrated.
+        OSError: the directory cannot be created or read.
     """
 
     def __init__(self, data_dir: Path, *, durable: bool = False, log_keep: int = 100_000) -> None:
         from space.store.migrate import open_store
 
         data_dir.mkdir(parents=True, exist_ok=True)
+        self.data_dir = data_dir
         self.path = data_dir / "oxigraph"
         self.durable = durable
         self.log_keep = log_keep
-        self.store: ox.Store = open_store(data_dir, self.path)
+        self.open_error = ""  # why the database could only be opened read-only
+        try:
+            self.store: ox.Store = open_store(data_dir, self.path)
+        except OSError as exc:
+            if not self.path.exists():
+                raise
+            self.store = ox.Store.read_only(str(self.path))
+            self.open_error = f"the database opened read-only: {exc}"
         self._commits = 0
 
     def close(self) -> None:
@@ -202,19 +216,32 @@ class StoreDB:
             self._compact({e.space: e.seq for e in entries})
 
     def probe(self) -> None:
-        """Commit one small change and flush it: does the database commit again?
+        """Reopen the database and commit one small change: does it commit again?
+
+        After a failed write RocksDB refuses every later one until reopened, so
+        the store is reopened here. Call it only while no read is running (the
+        old store must be let go of before the directory can be opened again).
+        If it cannot be opened for writing, it is opened read-only meanwhile, so
+        reads go on serving what is on disk.
 
         Raises:
-            CommitFailed: it does not.
+            CommitFailed: it does not commit yet.
         """
+        from space.store.migrate import open_store
+
+        self.store = None  # type: ignore[assignment]
+        gc.collect()
         p, m, st = f"{_U}probe", META.value, STORE.value
         try:
+            self.store = open_store(self.data_dir, self.path)
             self.store.update(
                 f"DELETE WHERE {{ GRAPH <{m}> {{ <{st}> <{p}> ?x }} }} ;\n"
                 f'INSERT DATA {{ GRAPH <{m}> {{ <{st}> <{p}> "{time.time()}" }} }}'
             )
             self.store.flush()
-        except (OSError, RuntimeError) as exc:
+        except (OSError, RuntimeError, SpaceError) as exc:
+            if self.store is None:
+                self.store = ox.Store.read_only(str(self.path))
             raise CommitFailed(f"the database could not commit: {exc}") from exc
 
     def _compact(self, last: dict[str, int]) -> None:

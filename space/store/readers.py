@@ -81,6 +81,11 @@ class Readers:
         self._timer = threading.Thread(target=self._time, name="tspace-read-timer", daemon=True)
         self._timer.start()
 
+    @property
+    def running(self) -> int:
+        """Return how many reads are running (runaways past their limit included)."""
+        return self._running
+
     def close(self) -> None:
         """Stop the timer thread (reads still running finish unanswered)."""
         with self._wake:

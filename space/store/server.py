@@ -124,6 +124,9 @@ class StoreServer:
             OldDataDir: an old data directory could not be migrated.
         """
         self._db = StoreDB(self.data_dir, durable=self.durable, log_keep=self.log_keep)
+        if self._db.open_error:
+            self.failed = self._db.open_error
+            log.error("%s: serving reads, refusing writes until it commits", self.failed)
         replica = Replica(self.session, self.root, self._db, self._space, self._forget)
         for name in self._db.spaces():
             self._space(name)
@@ -342,7 +345,7 @@ class StoreServer:
 
     def _probe(self) -> None:
         """After a failed commit, try an empty one now and then; writes resume once one works."""
-        if not self.failed or time.monotonic() < self._next_probe:
+        if not self.failed or time.monotonic() < self._next_probe or self._readers.running:
             return
         try:
             self._db_().probe()
