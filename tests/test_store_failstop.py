@@ -61,7 +61,7 @@ def test_a_full_disk_refuses_writes_keeps_reads_and_resumes_once_freed(disk: Pat
             ts.write([(AC.before, AC.n, Literal(i)) for i in range(10)])
             _fill(disk / "filler")
             big = [(AC.big, AC.n, Literal(f"{i}" + "x" * 8000)) for i in range(1500)]
-            with pytest.raises(ChangesetRejected, match="not applied.*(space|No space)"):
+            with pytest.raises(ChangesetRejected, match=r"not applied.*(space|No space)"):
                 ts.write(big, timeout=30)
             with pytest.raises(ChangesetRejected, match="refuses writes"):
                 ts.write([(AC.small, AC.n, Literal(1))])
