@@ -57,7 +57,6 @@ def _unescape(text: str) -> str:
     return _UNESCAPE_RE.sub(one, text)
 
 
-@lru_cache(maxsize=_CACHED)
 def term(text: object) -> OxTerm:
     """Return the pyoxigraph term of one N-Triples term text.
 
@@ -66,6 +65,11 @@ def term(text: object) -> OxTerm:
     """
     if not isinstance(text, str) or not text:
         raise MalformedPayload(f"a term is a non-empty N-Triples string, got {_short(text)}")
+    return _term(text)
+
+
+@lru_cache(maxsize=_CACHED)
+def _term(text: str) -> OxTerm:
     if len(text) > MAX_TERM:
         raise MalformedPayload(f"a term is at most {MAX_TERM} characters, got {len(text)}")
     try:
