@@ -71,8 +71,8 @@ def _migrate(old: Path, store: ox.Store) -> None:
             conn.close()
     except sqlite3.Error as exc:
         raise OldDataDir(
-            f"{old} could not be read ({exc}); migrate it with: python -m space.store.migrate "
-            f"{old.parent}"
+            f"{old} (a data directory from before Oxigraph) could not be read ({exc}); repair it, "
+            f"then migrate it with: python -m space.store.migrate {old.parent}"
         ) from exc
     store.flush()
     old.rename(old.with_name(OLD_FILE + ".migrated"))
