@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import socket
 import statistics
 import subprocess
@@ -22,14 +23,45 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+def code_env(code: Path | None) -> dict[str, str]:
+    """Return the environment that runs `python -m space...` from the source tree `code`."""
+    env = dict(os.environ)
+    if code is not None:
+        env["PYTHONPATH"] = str(code)
+    return env
+
+
 @contextmanager
 def serve() -> Iterator[str]:
     """Run `tspace serve` on a fresh data dir; yield its endpoint; stop it after."""
+    with serve_process() as (endpoint, _pid):
+        yield endpoint
+
+
+@contextmanager
+def serve_process(code: Path | None = None, *extra: str) -> Iterator[tuple[str, int]]:
+    """Run `tspace serve` on a fresh data dir; yield its endpoint and pid; stop it after.
+
+    `code`: a source tree to run the server from (an older commit's worktree),
+    instead of the installed one; `extra`: more `serve` options.
+    """
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     with tempfile.TemporaryDirectory() as data:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "space.cli", "serve", "--listen", endpoint, "--data", data],
+            [
+                sys.executable,
+                "-m",
+                "space.cli",
+                "serve",
+                "--listen",
+                endpoint,
+                "--data",
+                data,
+                *extra,
+            ],
             stderr=subprocess.DEVNULL,
+            env=code_env(code),
+            cwd=str(code) if code is not None else None,
         )
         try:
             deadline = time.monotonic() + 20
@@ -42,7 +74,7 @@ def serve() -> Iterator[str]:
                     if time.monotonic() > deadline:
                         raise
                     time.sleep(0.05)
-            yield endpoint
+            yield endpoint, proc.pid
         finally:
             proc.terminate()
             proc.wait(timeout=10)

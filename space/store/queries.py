@@ -51,26 +51,58 @@ class Deadline:
             raise QueryTimeLimit(time_limit_message(self.limit))
 
 
-def _template_query(space: str, graphs: tuple[str, ...]) -> str:
-    branches = [
-        f'{{ GRAPH <{graph(space, g).value}> {{ ?s ?p ?o }} BIND("{g}" AS ?g) }}' for g in graphs
-    ]
-    branches.append(
-        f"{{ GRAPH <{META.value}> {{ <{space_node(space).value}> <{SEQ.value}> ?seq }} }}"
-    )
-    return "SELECT ?g ?s ?p ?o ?seq WHERE { " + " UNION ".join(branches) + " }"
-
-
 def read(db: StoreDB, space: str, req: QueryRequest, deadline: Deadline) -> bytes:
-    """Answer `query`, `read`, `snapshot` and `prefixes` from one snapshot."""
+    """Answer `query`, `read`, `snapshot` and `prefixes` from one snapshot, with its seq."""
     if req.op == "prefixes":
         return pack({"seq": _seq(db, space), "prefixes": PrefixMap(db.prefixes(space)).as_dict()})
     graphs = ("t", "i") if req.graph == "all" or req.op == "snapshot" else (req.graph,)
-    subs = {v: t for v, t in zip((_S, _P, _O), req.template, strict=True) if t is not None}
+    seq, found = _consistent(db, space, graphs, req.template, deadline)
+    if req.op == "read":
+        found = {g: _one_subject(ts) for g, ts in found.items()}
+    return pack({"seq": seq, **found})
+
+
+def _consistent(
+    db: StoreDB, space: str, graphs: tuple[str, ...], pattern: tuple, deadline: Deadline
+) -> tuple[int, dict[str, list[list[str]]]]:
+    """Return the matching triples of each graph and the seq of the very snapshot they come from.
+
+    Each `quads_for_pattern` call reads its own snapshot, taken when it is called:
+    the seq is read before and after opening them all; equal, no commit came
+    between, so it is theirs. A commit in between (rare: one batch's commit
+    takes about a millisecond) makes it try again, then read everything with
+    one SPARQL query instead, slower but one snapshot by construction.
+    """
+    for _ in range(3):
+        before = _seq(db, space)
+        iterators = {g: db.store.quads_for_pattern(*pattern, graph(space, g)) for g in graphs}
+        if _seq(db, space) == before:
+            found: dict[str, list[list[str]]] = {}
+            text = oxterms.text
+            for g, quads in iterators.items():
+                rows = found[g] = []
+                for n, q in enumerate(quads):
+                    if n % 4096 == 0:
+                        deadline.check()
+                    rows.append([text(q.subject), text(q.predicate), text(q.object)])
+            return before, found
+    return _one_query(db, space, graphs, pattern, deadline)
+
+
+def _one_query(
+    db: StoreDB, space: str, graphs: tuple[str, ...], pattern: tuple, deadline: Deadline
+) -> tuple[int, dict[str, list[list[str]]]]:
+    branches = [
+        f'{{ GRAPH <{graph(space, g).value}> {{ ?s ?p ?o }} BIND("{g}" AS ?g) }}' for g in graphs
+    ]
+    node, seq_p = space_node(space).value, SEQ.value
+    branches.append(f"{{ GRAPH <{META.value}> {{ <{node}> <{seq_p}> ?seq }} }}")
+    text = "SELECT ?g ?s ?p ?o ?seq WHERE { " + " UNION ".join(branches) + " }"
+    subs = {v: t for v, t in zip((_S, _P, _O), pattern, strict=True) if t is not None}
     found: dict[str, list[list[str]]] = {g: [] for g in graphs}
     seq = 0
-    for n, row in enumerate(db.store.query(_template_query(space, graphs), substitutions=subs)):
-        if n % 1024 == 0:
+    for n, row in enumerate(db.store.query(text, substitutions=subs)):
+        if n % 4096 == 0:
             deadline.check()
         which = row["g"]
         if which is None:
@@ -79,9 +111,7 @@ def read(db: StoreDB, space: str, req: QueryRequest, deadline: Deadline) -> byte
         found[which.value].append(
             [oxterms.text(row["s"]), oxterms.text(row["p"]), oxterms.text(row["o"])]
         )
-    if req.op == "read":
-        found = {g: _one_subject(ts) for g, ts in found.items()}
-    return pack({"seq": seq, **found})
+    return seq, found
 
 
 def _one_subject(triples: list[list[str]]) -> list[list[str]]:
