@@ -77,7 +77,11 @@ def serve_process(code: Path | None = None, *extra: str) -> Iterator[tuple[str, 
             yield endpoint, proc.pid
         finally:
             proc.terminate()
-            proc.wait(timeout=10)
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:  # still busy (an old store finishing a query)
+                proc.kill()
+                proc.wait()
 
 
 def percentile(values: Sequence[float], q: float) -> float:

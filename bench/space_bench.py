@@ -176,6 +176,7 @@ def main() -> None:
             with serve_process(code) as (endpoint, pid):
                 for measure_name, value in measure(endpoint, pid, code, run, args).items():
                     results[name].setdefault(measure_name, []).append(value)
+                    print(f"  run {run + 1} {name}: {measure_name} = {value:.3f}", file=sys.stderr)
     names = list(results["new"])
     header = ["measure", *(f"{n} median" for n in codes), *(f"{n} min..max" for n in codes)]
     rows = []

@@ -115,7 +115,7 @@ def write_request(payload: bytes) -> WriteRequest:
         count += len(listed)
         if count > MAX_TRIPLES:
             raise MalformedPayload(f"a changeset holds at most {MAX_TRIPLES} triples")
-        lists.append([oxterms.triple(t) for t in listed])
+        lists.append(oxterms.triples(listed))
     req.added, req.removed, req.inferred_added, req.inferred_removed = lists
     return req
 

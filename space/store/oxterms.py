@@ -112,6 +112,58 @@ def triple(parts: object) -> OxTriple:
     return s, p, o
 
 
+def triples(rows: list) -> list[OxTriple]:
+    """Return the pyoxigraph triples of a list of `[s, p, o]` texts, parsed in bulk.
+
+    Each text is first matched whole as one term (so no text can carry a second
+    term, a comment or a line end into the document), then the lot is parsed by
+    Oxigraph's N-Triples parser at once. Anything it refuses is parsed again
+    term by term, for an error that names the term.
+
+    Raises:
+        MalformedPayload: as `triple`.
+    """
+    if all(_well_formed(row) for row in rows):
+        document = "".join(f"{s} {p} {o} .\n" for s, p, o in rows)
+        try:
+            parsed = [
+                (_skolem(q.subject), q.predicate, _skolem(q.object))
+                for q in ox.parse(document, format=ox.RdfFormat.N_TRIPLES)
+            ]
+        except (SyntaxError, ValueError):
+            parsed = []
+        if len(parsed) == len(rows):
+            return parsed  # type: ignore[return-value]
+    return [triple(row) for row in rows]
+
+
+def _well_formed(row: object) -> bool:
+    if not isinstance(row, list | tuple) or len(row) != 3:
+        return False
+    if isinstance(row[1], str) and row[1].startswith("<" + SKOLEM):
+        return False
+    for t in row:
+        if not isinstance(t, str) or not t or len(t) > MAX_TERM:
+            return False
+        first = t[0]
+        match = (
+            _IRI_RE.match(t)
+            if first == "<"
+            else _LITERAL_RE.match(t)
+            if first == '"'
+            else _BNODE_RE.match(t)
+        )
+        if match is None:
+            return False
+    return True
+
+
+def _skolem(node: object) -> OxTerm:
+    if isinstance(node, ox.BlankNode):
+        return ox.NamedNode(SKOLEM + node.value)
+    return node  # type: ignore[return-value]
+
+
 @lru_cache(maxsize=_CACHED)
 def text(node: OxTerm) -> str:
     """Return the N-Triples text of a stored term (skolem IRIs back as blank nodes)."""
