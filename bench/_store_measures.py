@@ -74,17 +74,19 @@ def sparql_times(endpoint: str, space: str, runs: int) -> dict[str, float]:
 
 
 def writes_beside_a_slow_query(endpoint: str, seconds: float = 5.0) -> tuple[float, float, float]:
-    """Return (query s, p50 ms, p99 ms) of 100 acked writes while a ~`seconds` query runs.
+    """Return (query s, p50 ms, p99 ms) of 100 acked writes spread over a ~`seconds` query.
 
-    The query counts a cross join; its size is calibrated on this store first.
+    The query counts a four-way cross join, its size calibrated on this store
+    first; the writes (another client, another space) start once it runs and are
+    spread over its expected duration.
     """
+    text = "SELECT (COUNT(*) AS ?n) WHERE { ?a ?p ?b . ?c ?q ?d . ?e ?r ?f . ?g ?s ?h }"
     with TripleSpace.open(endpoint, space="slowq") as ts:
-        n = 20
+        n = 10
         ts.write([(EX[f"x{i}"], EX.v, Literal(i)) for i in range(n)])
-        text = "SELECT (COUNT(*) AS ?n) WHERE { ?a ?p ?b . ?c ?q ?d . ?e ?r ?f . ?g ?s ?h }"
         took = _timed(ts, text)
-        while took < seconds / 3:
-            grow = max(2, int(n * min(4.0, (seconds / max(took, 1e-3)) ** 0.25)))
+        while took < seconds * 0.6:
+            grow = max(n + 2, int(n * min(2.0, (seconds / max(took, 1e-3)) ** 0.25)))
             ts.write([(EX[f"x{i}"], EX.v, Literal(i)) for i in range(n, grow)])
             n = grow
             took = _timed(ts, text)
@@ -92,12 +94,13 @@ def writes_beside_a_slow_query(endpoint: str, seconds: float = 5.0) -> tuple[flo
         query = threading.Thread(target=lambda: holder.append(_timed(ts, text)))
         with TripleSpace.open(endpoint, space="beside") as writer:
             query.start()
-            time.sleep(0.2)  # the query must be running before the writes start
+            time.sleep(0.3)  # the query must be running at the store before the writes start
             delays = []
             for i in range(100):
                 begun = time.perf_counter()
-                writer.write([(EX.w, EX.n, Literal(i))], timeout=120)
+                writer.write([(EX.w, EX.n, Literal(i))], timeout=300)
                 delays.append((time.perf_counter() - begun) * 1000)
+                time.sleep(max(0.0, took * 0.8 / 100 - (time.perf_counter() - begun)))
             query.join()
     return holder[0], percentile(delays, 50), percentile(delays, 99)
 
