@@ -27,6 +27,7 @@ import logging
 import time
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
 import pyoxigraph as ox
@@ -62,6 +63,7 @@ class DataDirInUse(SpaceError):
     """Another store process has the data directory open."""
 
 
+@lru_cache(maxsize=4096)
 def graph(space: str, which: str) -> ox.NamedNode:
     """Return the IRI of a space's graph: `t` (asserted), `i` (inferred) or `stamps`."""
     name = {"t": "asserted", "i": "inferred"}.get(which, which)
