@@ -60,3 +60,15 @@ def test_cli_write_prints_what_was_not_applied_and_strict_exits_1(ts, run_tspace
     strict = run_tspace("write", "--strict", str(doc))
     assert strict.returncode == 1
     assert "not applied" in strict.stderr
+
+
+def test_a_retry_gets_the_first_ack_with_what_was_not_applied(ts):
+    _functional(ts)
+    older = ts.changeset([(AC.b5, AC.battery_level, Literal("high")), (AC.b5, AC.seen, Literal(1))])
+    ts.send(ts.changeset([(AC.b5, AC.battery_level, Literal("low"))]))
+    first = ts.send(older)
+    again = ts.send(older)  # as a client would after a lost reply
+    assert again.again and not first.again
+    assert again.seq == first.seq
+    assert again.dropped == first.dropped and len(first.dropped) == 1
+    assert ts.snapshot()[1] == first.seq, "applied once"

@@ -8,7 +8,8 @@ Layout (every IRI under `urn:tspace:`, space names being IRI-safe):
   as the triple `s p "<timestamp>"`, so the later-timestamp rule survives restarts.
 - `meta`: `space:<space> seq N` (the space's sequence number) and its prefixes.
 - `log:<space>`: per changeset `log:<space>:<seq>` with its `n`, the published
-  payload (base64 msgpack) and the request id it answered.
+  payload (base64 msgpack), the request id it answered and what its writer was
+  told was not applied.
 
 `commit` writes a batch of changesets, each with its log entry and sequence
 number, as ONE SPARQL UPDATE: Oxigraph applies an update atomically (one
@@ -48,6 +49,7 @@ STORE = ox.NamedNode(_U + "store")
 N = ox.NamedNode(_U + "n")
 PAYLOAD = ox.NamedNode(_U + "payload")
 REQUEST = ox.NamedNode(_U + "request")
+DROPPED = ox.NamedNode(_U + "dropped")
 INT = ox.NamedNode("http://www.w3.org/2001/XMLSchema#integer")
 FUNCTIONAL = (
     "http://www.w3.org/1999/02/22-rdf-syntax-ns#type",
@@ -90,6 +92,7 @@ class Entry:
     seq: int
     request: str
     payload: bytes
+    dropped: bytes = b""  # msgpack of what the writer was told was not applied (if anything)
     removed: list[OxTriple] = field(default_factory=list)
     added: list[OxTriple] = field(default_factory=list)
     inferred_removed: list[OxTriple] = field(default_factory=list)
@@ -269,14 +272,20 @@ class StoreDB:
                 rows.append((seq, base64.b64decode(q.object.value)))
         return rows
 
-    def outcome(self, space: str, request: str) -> tuple[int, bytes] | None:
-        """Return the `(seq, payload)` of the changeset that answered a request id, if logged."""
+    def outcome(self, space: str, request: str) -> tuple[int, bytes, bytes] | None:
+        """Return `(seq, payload, dropped)` of the changeset that answered a request id, if logged.
+
+        `dropped` is the msgpack list the writer was told was not applied (b"" if none).
+        """
         g = _log_graph(space)
         for q in self.store.quads_for_pattern(None, REQUEST, ox.Literal(request), g):
             seq = int(q.subject.value.rsplit(":", 1)[1])
             rows = self.log(space, seq, seq)
             if rows:
-                return rows[0]
+                dropped = b""
+                for d in self.store.quads_for_pattern(q.subject, DROPPED, None, g):
+                    dropped = base64.b64decode(d.object.value)
+                return seq, rows[0][1], dropped
         return None
 
     def triples(self, space: str) -> Iterator[tuple[str, str, str, str, str]]:
@@ -328,8 +337,10 @@ class StoreDB:
             raise CommitFailed(f"the database could not commit: {exc}") from exc
 
 
-def log_quads(space: str, seq: int, request: str, payload: bytes) -> list[ox.Quad]:
-    """Return the quads of one log entry: its seq, payload and the request id it answered."""
+def log_quads(
+    space: str, seq: int, request: str, payload: bytes, dropped: bytes = b""
+) -> list[ox.Quad]:
+    """Return the quads of one log entry: its seq, payload, request id and what was dropped."""
     entry, g = _entry(space, seq), _log_graph(space)
     quads = [
         ox.Quad(entry, N, ox.Literal(str(seq), datatype=INT), g),
@@ -337,6 +348,8 @@ def log_quads(space: str, seq: int, request: str, payload: bytes) -> list[ox.Qua
     ]
     if request:
         quads.append(ox.Quad(entry, REQUEST, ox.Literal(request), g))
+    if dropped:
+        quads.append(ox.Quad(entry, DROPPED, ox.Literal(base64.b64encode(dropped).decode()), g))
     return quads
 
 
@@ -357,7 +370,7 @@ def _operations(e: Entry, *, fresh: bool = False) -> list[str]:
         deletes.append(_block(META, [(node, SEQ, ox.Literal(str(e.seq - 1), datatype=INT))]))
     meta = [(node, SEQ, ox.Literal(str(e.seq), datatype=INT))]
     meta += [(node, PREFIX, ox.Literal(f"{n} {ns}")) for n, ns in e.prefixes.items()]
-    logged = [q.triple for q in log_quads(e.space, e.seq, e.request, e.payload)]
+    logged = [q.triple for q in log_quads(e.space, e.seq, e.request, e.payload, e.dropped)]
     inserts = [
         _block(graph(e.space, "t"), e.added),
         _block(graph(e.space, "i"), e.inferred_added),

@@ -264,9 +264,14 @@ class StoreServer:
             return
         done = self._db_().outcome(state.name, write.id) if write.id else None
         if done is not None:
-            self._answer(req, {"id": write.id, "seq": done[0], "again": True})
+            again: dict = {"id": write.id, "seq": done[0], "again": True}
+            if done[2]:
+                again["dropped"] = unpack(done[2])
+            self._answer(req, again)
             return
         net, dropped = state.decide(write, write.ts or str(self.session.new_timestamp()))
+        if net is not None and dropped:
+            net.entry.dropped = pack(dropped)  # a retry is told the same
 
         def reply(net: Net | None) -> dict:
             ack: dict = {"id": write.id, "seq": net.entry.seq if net else state.seq}
