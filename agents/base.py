@@ -21,28 +21,25 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import ClassVar
 
 import zenoh
-from rdflib import URIRef
 from rdflib.term import Node
 
-from agents.view import AC, RECORD_PREFIX, View
-from space import Change, SpaceError, SpaceTimeout, SpaceUnavailable, Subscription, TripleSpace
-from space.cli.options import add_connect
-from space.heap import freeze_startup
-from space.presence import declare_agent
+from agents.view import View
+from agents.vocabulary import RECORD_PREFIX, local_name, robot_iri
+from agents.writes import Writes
+from space import (
+    Change,
+    SpaceError,
+    SpaceTimeout,
+    SpaceUnavailable,
+    Subscription,
+    TripleSpace,
+    add_connect,
+    declare_agent,
+    freeze_startup,
+    identity_of,
+)
 
 Values = Mapping[tuple[Node, Node], Node | None]
-
-
-def robot_iri(text: str) -> URIRef:
-    """Return the IRI of a robot given as an IRI, `ac:name` or a bare local name."""
-    if "://" in text or text.startswith("urn:"):
-        return URIRef(text)
-    return AC[text.removeprefix("ac:")]
-
-
-def local_name(iri: URIRef) -> str:
-    """Return the part of an IRI after its last `#` or `/`."""
-    return str(iri).rsplit("#", 1)[-1].rsplit("/", 1)[-1]
 
 
 class SimClock:
@@ -91,12 +88,14 @@ class Agent:
         self.log = logging.getLogger(self.name)
         self.clock = SimClock(args.time_scale)
         self.view = View()
+        self.writes = Writes()
         self.ts: TripleSpace | None = None
         self.started = False
         self._token: zenoh.LivelinessToken | None = None
         self._subscription: Subscription | None = None
-        self._inbox: queue.SimpleQueue[Change | None] = queue.SimpleQueue()
+        self._inbox: queue.SimpleQueue[Change | Callable[[], None] | None] = queue.SimpleQueue()
         self._stop = threading.Event()
+        self._early: list[Callable[[], None]] = []
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -122,6 +121,7 @@ class Agent:
                         space=self.args.space,
                         agent=self.name,
                         config_file=self.args.config,
+                        identity=identity_of(self.args, self.name),
                     )
                     self._token = declare_agent(self.ts.session, self.ts.space, self.name)
                 self._subscription = self.subscribe()
@@ -168,6 +168,7 @@ class Agent:
                     change = self._inbox.get_nowait()
                 except queue.Empty:
                     change = None
+            self._surface_failed_writes()
             if self.started and (changed or time.monotonic() >= next_tick):
                 self._guarded(self.tick, "tick")
                 next_tick = time.monotonic() + self.args.tick
@@ -179,9 +180,18 @@ class Agent:
         self._stop.set()
         self._inbox.put(None)
 
+    def call_soon(self, work: Callable[[], None]) -> None:
+        """Run `work` on the loop's thread soon, then tick; safe from any thread.
+
+        What a Zenoh callback must not do itself (write to the space, call a
+        service) it hands over so. Work before the view is rebuilt waits for it.
+        """
+        self._inbox.put(work)
+
     def shutdown(self) -> None:
-        """Close the subscription, the liveliness token and the space, in that order."""
+        """Settle the writes in flight, close the subscription, the token and the space."""
         try:
+            self.writes.close(self.args.timeout)
             if self._subscription is not None:
                 self._subscription.close()
             if self._token is not None:
@@ -193,13 +203,21 @@ class Agent:
 
     # Handling
 
-    def _handle(self, change: Change) -> None:
+    def _handle(self, change: Change | Callable[[], None]) -> None:
+        if not isinstance(change, Change):
+            if self.started:
+                self._guarded(change, "work")
+            else:
+                self._early.append(change)
+            return
         if self.keeps_view:
-            self.view.apply(change)
+            self.view.apply(change, snapshot=not self.started)
         if not self.started:
             self.started = True
-            self.log.info("view rebuilt from the space: %d triples", len(self.view.graph))
+            self.log.info("view rebuilt from the space: %d triples", len(self.view))
             self._guarded(self.on_start, "start")
+            while self._early:
+                self._guarded(self._early.pop(0), "work")
         else:
             self._guarded(lambda: self.on_change(change), f"change {change.id}")
 
@@ -214,15 +232,20 @@ class Agent:
 
     # Writing
 
-    def set_values(self, values: Values, *, cause: str | None = None) -> str | None:
+    def set_values(
+        self, values: Values, *, cause: str | None = None, wait: bool = False
+    ) -> str | None:
         """Write single-valued states as one changeset; return its id, None if nothing changed.
 
         `values` maps (subject, predicate) to the new object (None removes the
-        state). The view is updated at once so the next tick sees it. Blocks
-        until the store made the change durable.
+        state). The view is updated at once so the next tick sees it. Returns as
+        soon as the changeset is sent: its acknowledgement is read off the loop,
+        and a write the store did not take is undone in the view and logged
+        (`_surface_failed_writes`). With `wait` (a person waiting for the answer,
+        as the HMI's commands), blocks until the store made it durable instead.
 
         Raises:
-            SpaceError: the store did not take it (the view is left as it was).
+            SpaceError: with `wait`, the store did not take it (the view is left as it was).
         """
         assert self.ts is not None
         added, removed = [], []
@@ -237,12 +260,26 @@ class Agent:
             return None
         self.view.remove(removed)
         self.view.add(added)
+        cs = self.ts.changeset(added, removed, cause=cause)
+        if not wait:
+            self.writes.track(
+                cs.id, self.ts.send_later(cs, timeout=self.args.timeout), added, removed
+            )
+            return cs.id
         try:
-            return self.ts.apply(added, removed, cause=cause, timeout=self.args.timeout)
+            return self.ts.send(cs, timeout=self.args.timeout)
         except SpaceError:
             self.view.remove(added)
             self.view.add(removed)
             raise
+
+    def _surface_failed_writes(self) -> None:
+        """Undo in the view, and log, each write the store did not take (the loop's thread)."""
+        for failed in self.writes.failed():
+            self.log.warning("write %s not taken, undone in the view: %s", failed.id, failed.error)
+            if all(t in self.view.graph for t in failed.added):
+                self.view.remove(failed.added)
+                self.view.add(failed.removed)
 
     # Hooks
 
@@ -256,10 +293,13 @@ class Agent:
         """Advance simulations and controllers; called every `--tick` seconds. Never blocks long."""
 
 
-def build_parser(cls: type[Agent]) -> argparse.ArgumentParser:
-    """Return the command-line parser of an agent class: common options, then its own."""
+def build_parser(cls: type[Agent], prog: str | None = None) -> argparse.ArgumentParser:
+    """Return the command-line parser of an agent class: common options, then its own.
+
+    `prog` is how the agent was run, for its usage line (`python -m agents.KIND` by default).
+    """
     parser = argparse.ArgumentParser(
-        prog=f"python -m agents.{cls.kind}", description=(cls.__doc__ or "").split("\n")[0]
+        prog=prog or f"python -m agents.{cls.kind}", description=(cls.__doc__ or "").split("\n")[0]
     )
     add_connect(parser)
     parser.add_argument(
@@ -288,9 +328,9 @@ def build_parser(cls: type[Agent]) -> argparse.ArgumentParser:
     return parser
 
 
-def run_agent(cls: type[Agent], argv: Sequence[str] | None = None) -> int:
-    """Run an agent until SIGINT or SIGTERM; return the process exit code."""
-    args = build_parser(cls).parse_args(argv)
+def run_agent(cls: type[Agent], argv: Sequence[str] | None = None, prog: str | None = None) -> int:
+    """Run an agent until SIGINT or SIGTERM; return the exit code (`prog`: see `build_parser`)."""
+    args = build_parser(cls, prog).parse_args(argv)
     logging.basicConfig(
         stream=sys.stderr,
         level=[logging.INFO, logging.DEBUG][min(args.verbose, 1)],

@@ -23,8 +23,8 @@ from rdflib import Literal, URIRef
 from rdflib.term import Node
 
 from agents.automaton import DOCKING_TIME, RETRY_AFTER, Plan, Situation, TaskAutomaton
-from agents.base import Agent, local_name, run_agent
-from agents.view import AC
+from agents.base import Agent, run_agent
+from agents.vocabulary import AC, local_name
 
 
 class Behavior(Agent):
@@ -169,9 +169,9 @@ def _name(node: Node | None) -> str | None:
     return None if node is None else str(node)
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run the behaviour machine (see `--help`)."""
-    return run_agent(Behavior, argv)
+    return run_agent(Behavior, argv, prog)
 
 
 if __name__ == "__main__":

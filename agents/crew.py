@@ -25,9 +25,8 @@ from agents.base import Agent, run_agent
 from agents.behavior import Behavior
 from agents.hw_monitor import HwMonitor
 from agents.nav_monitor import NavMonitor
-from agents.view import AC
-from space import Change, TripleSpace
-from space.presence import declare_agent
+from agents.vocabulary import AC
+from space import Change, TripleSpace, declare_agent
 
 KINDS: dict[str, type[Agent]] = {
     "hw_monitor": HwMonitor,
@@ -68,6 +67,7 @@ class Crew(Agent):
         ]
         for member in self.members:
             member.view = self.view  # one view for all: the space is the same
+            member.writes = self.writes  # one thread settles all their writes
         self._tokens: list[zenoh.LivelinessToken] = []
         self._touched: set[Node] = set()
         self._full_tick_at = 0.0
@@ -101,7 +101,9 @@ class Crew(Agent):
         super().setup()
         assert self.ts is not None
         for member in self.members:
-            member.ts = TripleSpace(self.ts.session, self.ts.space, agent=member.name)
+            member.ts = TripleSpace(
+                self.ts.session, self.ts.space, agent=member.name, writer=self.ts.writer
+            )
             self._tokens.append(declare_agent(self.ts.session, self.ts.space, member.name))
         self.log.info("crew of %d agents for %d robots", len(self.members), len(self.robots))
 
@@ -162,9 +164,9 @@ class Crew(Agent):
         self._touched.clear()
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run a crew (see `--help`)."""
-    return run_agent(Crew, argv)
+    return run_agent(Crew, argv, prog)
 
 
 if __name__ == "__main__":

@@ -18,8 +18,8 @@ from datetime import UTC, datetime
 from rdflib import RDF, Graph, Literal, URIRef
 from rdflib.term import Node
 
-from agents.view import AC, RECORD_PREFIX
-from space.terms import Triple
+from agents.vocabulary import AC, RECORD_PREFIX
+from space import Triple
 
 FIRING_PREFIX = RECORD_PREFIX  # the subjects of firing records
 RULE_NAME = AC.rule_name
@@ -75,10 +75,30 @@ class FiringLog:
             return [name], []
         self._answering = (cause, robot) if cause else None
         self._named = {rule}
+        return self._new(AC.RuleFiring, [rule], cause, robot, when)
+
+    def loop(
+        self, rules: Iterable[str], cause: str | None, robot: Node, when: datetime | None = None
+    ) -> tuple[list[Triple], list[Triple]]:
+        """Add a record of a rule loop (`ac:RuleLoop`): the rules that kept firing, undone.
+
+        Returns (triples to add, triples of records to drop), as `record` does.
+        """
+        self._answering = None
+        return self._new(AC.RuleLoop, rules, cause, robot, when)
+
+    def _new(
+        self,
+        kind: URIRef,
+        rules: Iterable[str],
+        cause: str | None,
+        robot: Node,
+        when: datetime | None,
+    ) -> tuple[list[Triple], list[Triple]]:
         iri = URIRef(f"{self.prefix}{self.next}")
         triples: list[Triple] = [
-            (iri, RDF.type, AC.RuleFiring),
-            (iri, RULE_NAME, self._name(rule)),
+            (iri, RDF.type, kind),
+            *((iri, RULE_NAME, self._name(rule)) for rule in rules),
             (iri, AC.robot, robot),
             (iri, AC.fired_at, Literal(when or datetime.now(UTC))),
             (iri, AC.firing_seq, Literal(self.next)),

@@ -19,9 +19,9 @@ import sys
 import zenoh
 from rdflib import RDF, Literal, URIRef
 
-from agents.base import Agent, Values, local_name, run_agent
-from agents.view import AC
-from space.presence import alive_agents, watch_agents
+from agents.base import Agent, Values, run_agent
+from agents.vocabulary import AC, local_name
+from space import alive_agents, watch_agents
 
 PRESENT = Literal("present")
 GONE = Literal("gone")
@@ -106,9 +106,9 @@ class FleetMonitor(Agent):
             self.set_values(values)
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run the fleet monitor (see `--help`)."""
-    return run_agent(FleetMonitor, argv)
+    return run_agent(FleetMonitor, argv, prog)
 
 
 if __name__ == "__main__":

@@ -20,7 +20,7 @@ from rdflib.term import Node
 from agents.base import Agent, run_agent
 from agents.sim.battery import CHARGE_RATE, DEFAULT_LEVELS, Battery, level_of, middle_of
 from agents.sim.devices import FAULTS, MODES, SWITCH_DELAY, Driver, drain, obstacles_seen
-from agents.view import AC
+from agents.vocabulary import AC
 from space import Change
 
 
@@ -197,9 +197,9 @@ class HwMonitor(Agent):
         return values
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run the hardware monitor (see `--help`)."""
-    return run_agent(HwMonitor, argv)
+    return run_agent(HwMonitor, argv, prog)
 
 
 if __name__ == "__main__":

@@ -21,7 +21,7 @@ from rdflib.term import Node
 
 from agents.base import Agent, run_agent
 from agents.sim.base import DEFAULT_SPEEDS, Base, nearest
-from agents.view import AC
+from agents.vocabulary import AC
 
 POSITION_GRID = 0.5
 
@@ -136,9 +136,9 @@ class NavMonitor(Agent):
         return values
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run the navigation monitor (see `--help`)."""
-    return run_agent(NavMonitor, argv)
+    return run_agent(NavMonitor, argv, prog)
 
 
 if __name__ == "__main__":

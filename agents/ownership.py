@@ -31,11 +31,9 @@ import zenoh
 from rdflib import RDF
 from rdflib.term import Node
 
-from agents.base import local_name
-from agents.view import AC
-from space import keys
+from agents.vocabulary import AC, local_name
+from space import KEY_ROOT, Triple, escape_key_chunk, unescape_key_chunk
 from space.reasoning import RuleEngine
-from space.terms import Triple
 
 PREFIX = "reasoner."
 
@@ -62,7 +60,7 @@ def concerned_robot(engine: RuleEngine, triples: Iterable[Triple]) -> Node | Non
 
 
 def _roster_key(space: str, entry: str = "*") -> str:
-    return f"{keys.ROOT}/{space}/@reasoners/{entry}"
+    return f"{KEY_ROOT}/{space}/@reasoners/{entry}"
 
 
 class Roster:
@@ -94,7 +92,7 @@ class Roster:
             entry = str(sample.key_expr).rsplit("/", 1)[1].split("-", 2)
             if len(entry) != 3 or not (entry[0].isdigit() and entry[1].isdigit()):
                 return  # not a reasoner's token of this version
-            name = keys.unescape(entry[2])
+            name = unescape_key_chunk(entry[2])
             with self._lock:
                 if sample.kind == zenoh.SampleKind.PUT:
                     self._joined[name] = (int(entry[0]), int(entry[1]))
@@ -109,7 +107,7 @@ class Roster:
         with self._lock:
             self._joined[self.me] = (stamp, start)
         return session.liveliness().declare_token(
-            _roster_key(space, f"{stamp}-{start}-{keys.escape(self.me)}")
+            _roster_key(space, f"{stamp}-{start}-{escape_key_chunk(self.me)}")
         )
 
     def answers(self, robot: Node | None, seq: int | None = None) -> bool:

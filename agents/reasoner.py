@@ -7,7 +7,8 @@ cause: what production rules changed (asserted) and what is entailed
 own changesets are ignored. A changed rules file is reloaded without a
 restart; a broken one is logged with its line and column and the rules in
 force stay. On start it writes the ontology (and `--robot-file`) into the
-space when the space does not have them yet.
+space when the space does not have them yet. It answers `why` on the space's
+`@/why` queryable (`space.WhyService`; who wrote what: `agents.writers`).
 
 One reasoner serves a whole fleet. With `--per-robot`, one per robot instead
 (a robot's reasoner can run on the robot): each applies every change, and
@@ -18,29 +19,48 @@ from __future__ import annotations
 
 import argparse
 import logging
-import os
 import sys
-import time
 from collections import deque
+from collections.abc import Callable
 from pathlib import Path
 
 import zenoh
 from rdflib import OWL, RDF, URIRef
 from rdflib.term import Node
 
-from agents.base import Agent, local_name, run_agent
+from agents.answers import Ledger, present_truth
+from agents.base import Agent, run_agent
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
+from agents.knowledge import Knowledge
 from agents.ownership import PREFIX, Roster, concerned_robot
-from agents.view import AC
-from space import Change, SpaceError, Subscription
-from space.heap import refreeze
-from space.reasoning import Delta, Firing, Origin, RuleEngine, RuleError, read_graph
-from space.request import Pending
-from space.terms import Triple, triple_to_nt
+from agents.vocabulary import AC, local_name
+from agents.writers import Writers
+from space import (
+    Change,
+    Changeset,
+    Explanation,
+    Pending,
+    SpaceError,
+    Subscription,
+    Template,
+    Triple,
+    WhyService,
+    refreeze,
+    replace_functional,
+    triple_to_nt,
+)
+from space.reasoning import (
+    Delta,
+    Explainer,
+    Firing,
+    Origin,
+    RuleEngine,
+    RuleError,
+    RuleLoopError,
+    read_graph,
+)
 
-REPO = Path(__file__).resolve().parents[1]
 ONTOLOGY_IRI = URIRef("https://w3id.org/tspace/selfconfig")
-RELOAD_PERIOD = 1.0
 IN_FLIGHT = 64  # answers sent, not yet acknowledged, at most
 
 
@@ -64,10 +84,14 @@ class Reasoner(Agent):
         self.roster = Roster(self.name) if args.per_robot else None
         self._others: zenoh.Subscriber | None = None
         self._joined: zenoh.LivelinessToken | None = None
-        self._mtimes: dict[Path, float] = {}
+        self.knowledge = Knowledge(args.rules, args.ontology)
         self._unacked: deque[tuple[str | None, Pending]] = deque()
-        self._checked = 0.0
+        self._ledger = Ledger()
+        self._diverged = False  # an answer was not taken, and no resync has succeeded since
         self._loaded_seq = 0
+        self.writers = Writers(self._history)
+        self.why = WhyService()
+        self._explainer: Explainer | None = None
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -105,16 +129,6 @@ class Reasoner(Agent):
             help="one reasoner per robot: answer for --robot (see agents.ownership)",
         )
 
-    @property
-    def rules_files(self) -> list[Path]:
-        """Return the rules files given, or the default one."""
-        return self.args.rules or [REPO / "rules" / "selfconfig.rules"]
-
-    @property
-    def ontology_files(self) -> list[Path]:
-        """Return the ontology files given, or the default one."""
-        return self.args.ontology or [REPO / "ontology" / "selfconfig.ttl"]
-
     # Start
 
     def subscribe(self) -> Subscription:
@@ -127,7 +141,7 @@ class Reasoner(Agent):
         if self.roster is not None and self._others is None:
             # Declared first: the reasoners present now are known once the engine is built.
             self._others = self.roster.watch(self.ts.session, self.ts.space)
-        engine = self._build()
+        engine = self.knowledge.build()
         # Its own answers and every firing record are left out before parsing: it ignores them.
         subscription = self.ts.subscribe(
             None,
@@ -146,21 +160,55 @@ class Reasoner(Agent):
             # Subscribed, read, then joined: the changes after what it read are its own.
             self._joined = self.roster.join(self.ts.session, self.ts.space, seq)
         self.firings.restore(asserted)
+        self.started = True
+        leads = self.roster is None or self.roster.answers(None)
+        if not leads:
+            self.log.info("another per-robot reasoner leads: it concludes the load")
+        self._load(engine, asserted, inferred, seq, write=leads)
+        return subscription
+
+    def _load(
+        self,
+        engine: RuleEngine,
+        asserted: list[Triple],
+        inferred: list[Triple],
+        seq: int,
+        *,
+        write: bool,
+    ) -> None:
+        """Load the space's state (as of change `seq`) into `engine`, make it this reasoner's.
+
+        With `write`, what loading concluded beyond the space is written into it.
+        """
         # In a canonical order: engines that load the same state fire the same way.
         state = sorted((t for t in asserted if not is_record(t)), key=triple_to_nt)
-        delta = engine.load(state)
+        delta, loop = _applying(lambda: engine.load(state))
         self.engine, self._loaded_seq = engine, seq
-        self.started = True
+        self._explainer = None
+        self.writers.loaded(seq)
+        self.why.open(self.ts.session, self.ts.space)
         self.log.info("loaded %d rules over %d asserted triples", len(engine.rules), len(asserted))
-        if self.roster is None or self.roster.answers(None):
-            self._write(delta, None, inferred_before=set(inferred))
-        else:
-            self.log.info("another per-robot reasoner leads: it concludes the load")
-        return subscription
+        if loop is not None:
+            self.log.error("loading the space: %s; those firings undone", loop)
+        if write:
+            self._write(delta, None, inferred_before=set(inferred), loop=loop)
+
+    def _resync(self) -> None:
+        """Rebuild the engine from the space, after an answer the space did not take.
+
+        The engine applied that answer's production changes; the space did not.
+        Reading the space back and writing what it lacks makes them one again.
+        """
+        assert self.ts is not None
+        asserted, inferred, seq = self.ts.graphs(timeout=self.args.timeout)
+        self._load(self.knowledge.build(), list(asserted), list(inferred), seq, write=True)
+        self._diverged = False
+        self.log.warning("resynchronised from the space at change %d", seq)
 
     def shutdown(self) -> None:
         """Withdraw from the per-robot reasoners, then leave the space."""
         try:
+            self.why.close()
             self._settle()
             if self._joined is not None:
                 self._joined.undeclare()
@@ -170,20 +218,11 @@ class Reasoner(Agent):
             self._joined, self._others = None, None
             super().shutdown()
 
-    def _build(self) -> RuleEngine:
-        """Return an engine for the rules and ontology files, remembering their mtimes.
-
-        Raises:
-            RuleError: a rules file is invalid (the message has its line and column).
-        """
-        self._mtimes = self._stat()
-        return RuleEngine.from_files(rules=self.rules_files, ontology=self.ontology_files)
-
     def _seed(self) -> None:
         """Write the ontology and the robot file into the space if it lacks them."""
         assert self.ts is not None
         if not len(self.ts.query((ONTOLOGY_IRI, RDF.type, OWL.Ontology))):
-            self.ts.write(read_graph(self.ontology_files), timeout=self.args.timeout)
+            self.ts.write(read_graph(self.knowledge.ontology), timeout=self.args.timeout)
             self.log.info("wrote the ontology into the space")
         robot_file = self.args.robot_file
         if robot_file and not len(self.ts.query((self.robot, RDF.type, AC.Robot))):
@@ -196,18 +235,28 @@ class Reasoner(Agent):
         """Apply another agent's changeset (firing records left out) and answer it."""
         if self.engine is None or change.seq <= self._loaded_seq:
             return  # in the state loaded
+        self.writers.note(change)
+        from_reasoner = self.roster is not None and change.agent.startswith(PREFIX)
+        if from_reasoner:
+            self._ledger.answered(change.cause)
         added, removed = list(change.added), list(change.removed)
         removed += self._replaced(added, removed)
         if not added and not removed:
             return
-        delta = self.engine.apply(added=added, removed=removed)
+        engine = self.engine
+        delta, loop = _applying(lambda: engine.apply(added=added, removed=removed))
+        if loop is not None:
+            self.log.error("change %s: %s; those firings undone, the change kept", change.id, loop)
         if self.roster is not None:
-            if change.agent.startswith(PREFIX):
+            if from_reasoner:
                 return  # another reasoner's answer: this engine concluded the same
             robot = concerned_robot(self.engine, [*added, *removed])
             if not self.roster.answers(robot, change.seq):
-                return  # another reasoner answers, having drawn the same conclusions
-        self._write(delta, change.id, wait=False)
+                # Another reasoner answers, having drawn the same conclusions; until its
+                # answer is seen, this one can stand in for it if it dies.
+                self._ledger.note(change.id, change.seq, robot, delta)
+                return
+        self._write(delta, change.id, wait=False, loop=loop)
 
     def _replaced(self, added: list[Triple], removed: list[Triple]) -> list[Triple]:
         """Return the old values of functional properties that `added` replaces.
@@ -215,12 +264,14 @@ class Reasoner(Agent):
         The store replaces them too; doing it here keeps the engine's state the
         store's even when a writer did not say what it replaced.
         """
-        engine, out = self.engine, []
+        engine = self.engine
         assert engine is not None
-        for s, p, o in added:
-            if (p, RDF.type, OWL.FunctionalProperty) in engine:
-                out += [t for t in engine.match(s, p) if t[2] != o and t not in removed]
-        return out
+        change = replace_functional(
+            added,
+            lambda p: (p, RDF.type, OWL.FunctionalProperty) in engine,
+            lambda s, p: [t[2] for t in engine.match(s, p)],
+        )
+        return [t for t in change.replaced if t not in removed]
 
     def _write(
         self,
@@ -229,6 +280,7 @@ class Reasoner(Agent):
         *,
         inferred_before: set[Triple] | None = None,
         wait: bool = True,
+        loop: RuleLoopError | None = None,
     ) -> None:
         """Write a delta (and its firing records) to the space as one changeset.
 
@@ -251,6 +303,10 @@ class Reasoner(Agent):
             new, old = self.firings.record(firing.rule, cause, self._robot_of(firing, robots))
             added += new
             removed += old
+        if loop is not None:
+            new, old = self.firings.loop(loop.rules, cause, self.robot)
+            added += new
+            removed += old
         if delta.firings:
             # One line per answer: 200 firings logged one by one took milliseconds.
             rules = dict.fromkeys(firing.rule for firing in delta.firings)
@@ -264,6 +320,7 @@ class Reasoner(Agent):
             inferred_removed=inferred_removed,
             cause=cause,
         )
+        self.writers.note(cs)
         if wait:
             self.ts.send(cs, timeout=self.args.timeout)
             return
@@ -274,16 +331,23 @@ class Reasoner(Agent):
     def _settle(self, count: int | None = None) -> None:
         """Read the acknowledgements of `count` answers in flight (all by default), oldest first.
 
-        An answer the store did not acknowledge is logged, as a failed change is.
+        An answer the store did not take leaves the engine ahead of the space: once
+        the answers in flight are read, the engine is rebuilt from the space (`_resync`).
         """
+        lost = False
         while self._unacked and (count is None or count > 0):
             cause, pending = self._unacked.popleft()
             try:
                 pending.result()
             except SpaceError as exc:
-                self.log.warning("answer to change %s: %s", cause, exc)
+                self.log.warning("answer to change %s not taken: %s", cause, exc)
+                lost = True
             if count is not None:
                 count -= 1
+        if lost:
+            self._settle()
+            self._diverged = True
+            self._resync()
 
     def _robot_of(self, firing: Firing, robots: dict[Node, bool]) -> Node:
         """Return the robot a firing concerned: the first robot among its premises, else `--robot`.
@@ -305,50 +369,66 @@ class Reasoner(Agent):
     def tick(self) -> None:
         """Read the answers' acknowledgements; reload the rules when a rules file changed.
 
-        The rules files are checked every second.
+        The rules files are checked every second. Answers another per-robot reasoner
+        owed and can no longer give (it left) are written here.
         """
         self._settle()
-        if time.monotonic() - self._checked < RELOAD_PERIOD:
-            return
-        self._checked = time.monotonic()
-        if self._stat() != self._mtimes:
+        self.why.answer_pending(self._explain)
+        if self._diverged:
+            self._resync()  # the store was away when it was first tried: again, every tick
+        if self.roster is not None and self.engine is not None and len(self._ledger):
+            for owed in self._ledger.take(self.roster.answers):
+                self.log.warning("answering change %s for a reasoner that left", owed.id)
+                self._write(present_truth(self.engine, [owed.delta]), owed.id, wait=False)
+        if self.knowledge.changed():
             self._reload()
-
-    def _stat(self) -> dict[Path, float]:
-        """Return the mtimes of the rules files and of the rules files beside them (includes)."""
-        paths: set[Path] = set()
-        for path in self.rules_files:
-            paths.add(path)
-            paths.update(path.parent.glob("*.rules"))
-        return {p: _mtime(p) for p in paths}
 
     def _reload(self) -> None:
         """Swap in an engine for the changed rules over the same asserted state."""
         assert self.engine is not None
         try:
-            engine = self._build()
+            engine = self.knowledge.build()
             inferred_before = set(self.engine.triples(Origin.INFERRED))
             delta = engine.load(sorted(self.engine.triples(Origin.ASSERTED), key=triple_to_nt))
         except RuleError as exc:
             self.log.error("rules not reloaded, the previous rules stay in force: %s", exc)
             return
-        self.engine = engine
+        self.engine, self._explainer = engine, None
         refreeze()  # the old engine is garbage now, out of the frozen generation
         self.log.info("rules reloaded: %d rules", len(engine.rules))
         if self.roster is None or self.roster.answers(None):
             self._write(delta, None, inferred_before=inferred_before)
 
+    # Why
 
-def _mtime(path: Path) -> float:
+    def _explain(self, template: Template, limit: int) -> tuple[list[Explanation], bool]:
+        """Explain at most `limit` matching triples the engine holds, in N-Triples order."""
+        assert self.engine is not None
+        matches = sorted(
+            (t for t in self.engine.match(*template.pattern()) if not is_record(t)),
+            key=triple_to_nt,
+        )
+        if self._explainer is None:
+            self._explainer = Explainer(self.engine.why, self.engine.rules, self.writers.lookup)
+        return self._explainer.explain(matches[:limit]), len(matches) > limit
+
+    def _history(self, first: int, last: int) -> list[Changeset]:
+        assert self.ts is not None
+        return self.ts.history(first, last, timeout=self.args.timeout)[0]
+
+
+def _applying(apply: Callable[[], Delta]) -> tuple[Delta, RuleLoopError | None]:
+    """Run an engine update; on a rule loop return what it kept, and the loop to report."""
     try:
-        return os.stat(path).st_mtime
-    except OSError:
-        return -1.0
+        return apply(), None
+    except RuleLoopError as loop:
+        assert loop.kept is not None
+        return loop.kept, loop
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     """Run the reasoner (see `--help`)."""
-    return run_agent(Reasoner, argv)
+    return run_agent(Reasoner, argv, prog)
 
 
 if __name__ == "__main__":

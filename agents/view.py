@@ -1,107 +1,28 @@
-"""An agent's local copy of the space: the triples it has seen, kept current by changes.
+"""An agent's view of the space: the library's local copy, read in the robot vocabulary.
 
-Agents decide from this view instead of asking the store on every tick, so a
-slow or absent store never stalls a control loop. The view is the union of the
-asserted and inferred graphs, as a snapshot reports it, without the reasoner's
-firing records: no agent decides from them (the HMI reads them from the
-changes), and a change that fires many rules would cost every agent their
-triples on its way to the robot.
+The copy itself (functional replacement, asserted and inferred kept apart) is
+`space.SpaceMirror`; this adds the readings agents share (a robot's devices,
+tasks by type, the integrator's levels) and leaves out the reasoner's firing
+records: no agent decides from them (the HMI reads them from the changes), and
+a change that fires many rules would cost every agent their triples.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 
-from rdflib import OWL, RDF, Graph, Literal, Namespace, URIRef
+from rdflib import RDF, Literal, URIRef
 from rdflib.term import Node
 
-from space.changeset import Changeset
-from space.memory import BulkMemory
-from space.terms import Triple
-
-AC = Namespace("https://w3id.org/tspace/selfconfig#")
-RECORD_PREFIX = str(AC) + "firing_"
+from agents.vocabulary import AC, RECORD_PREFIX
+from space import SpaceMirror, Triple
 
 
-class View:
-    """The triples an agent knows, with the lookups agents need.
-
-    The graph has no named graphs and changes go to its store's indexes
-    directly (`space.memory.BulkMemory`), and the functional properties are
-    kept in a set so that each triple added costs one lookup, not a graph query.
-    """
+class View(SpaceMirror):
+    """The triples an agent knows, with the lookups agents need (owner thread only)."""
 
     def __init__(self, triples: Iterable[Triple] = ()) -> None:
-        self._store = BulkMemory()
-        self.graph = Graph(store=self._store)
-        self._functional: set[Node] = set()
-        self.add(triples)
-
-    def apply(self, change: Changeset) -> None:
-        """Apply a changeset: removals first, then additions."""
-        self.remove([*change.removed, *change.inferred_removed])
-        self.add([*change.added, *change.inferred_added])
-
-    def add(self, triples: Iterable[Triple]) -> None:
-        """Add triples; a functional property's new value replaces the old one.
-
-        The store already replaces functional values, but a change may reach us
-        before the removal it implies, so the view enforces it too. Firing
-        records are left out.
-        """
-        store, functional = self._store, self._functional
-        for t in triples:
-            s, p, o = t
-            if s.startswith(RECORD_PREFIX):
-                continue
-            if p in functional:
-                for old in store.objects_of(s, p):
-                    if old != o:
-                        store.discard((s, p, old))
-            elif p == RDF.type and o == OWL.FunctionalProperty:
-                functional.add(s)
-            store.put(t)
-
-    def remove(self, triples: Iterable[Triple]) -> None:
-        """Remove triples (absent ones are ignored)."""
-        store = self._store
-        for triple in triples:
-            if triple[1] == RDF.type and triple[2] == OWL.FunctionalProperty:
-                self._functional.discard(triple[0])
-            store.discard(triple)
-
-    def is_functional(self, predicate: Node) -> bool:
-        """Return True if the view declares `predicate` an owl:FunctionalProperty."""
-        return predicate in self._functional
-
-    def value(self, subject: Node | None, predicate: Node) -> Node | None:
-        """Return one object of (subject, predicate), or None."""
-        if subject is None:
-            return None
-        return next(iter(sorted(self.graph.objects(subject, predicate))), None)
-
-    def text(self, subject: Node | None, predicate: Node) -> str | None:
-        """Return the lexical form of one object of (subject, predicate), or None."""
-        found = self.value(subject, predicate)
-        return None if found is None else str(found)
-
-    def number(self, subject: Node | None, predicate: Node) -> float | None:
-        """Return one numeric object of (subject, predicate), or None if absent or not a number."""
-        found = self.value(subject, predicate)
-        if not isinstance(found, Literal):
-            return None
-        try:
-            return float(found)
-        except ValueError:
-            return None
-
-    def objects(self, subject: Node, predicate: Node) -> list[Node]:
-        """Return the objects of (subject, predicate), sorted for determinism."""
-        return sorted(self.graph.objects(subject, predicate))
-
-    def has_type(self, subject: Node, cls: Node) -> bool:
-        """Return True if `subject rdf:type cls` is in the view."""
-        return (subject, RDF.type, cls) in self.graph
+        super().__init__(triples, skip_subjects=RECORD_PREFIX)
 
     def devices(self, robot: URIRef, cls: Node) -> list[URIRef]:
         """Return the robot's devices of class `cls`."""

@@ -13,7 +13,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-from space import SpaceError, TripleSpace
+from space import SpaceError, TripleSpace, load_identity
 
 
 def free_port() -> int:
@@ -32,20 +32,28 @@ def code_env(code: Path | None) -> dict[str, str]:
 
 
 @contextmanager
-def serve() -> Iterator[str]:
-    """Run `tspace serve` on a fresh data dir; yield its endpoint; stop it after."""
-    with serve_process() as (endpoint, _pid):
+def serve(secure: Path | None = None) -> Iterator[str]:
+    """Run `tspace serve` on a fresh data dir; yield its endpoint; stop it after.
+
+    With `secure` (a `tspace certs` directory), mutual TLS and the shipped policy.
+    """
+    with serve_process(None, secure=secure) as (endpoint, _pid):
         yield endpoint
 
 
 @contextmanager
-def serve_process(code: Path | None = None, *extra: str) -> Iterator[tuple[str, int]]:
+def serve_process(
+    code: Path | None = None, *extra: str, secure: Path | None = None
+) -> Iterator[tuple[str, int]]:
     """Run `tspace serve` on a fresh data dir; yield its endpoint and pid; stop it after.
 
     `code`: a source tree to run the server from (an older commit's worktree),
-    instead of the installed one; `extra`: more `serve` options.
+    instead of the installed one; `extra`: more `serve` options; `secure` (a
+    `tspace certs` directory): mutual TLS and the shipped policy.
     """
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    endpoint = f"{'tls' if secure else 'tcp'}/127.0.0.1:{free_port()}"
+    identity = load_identity(secure, "operator") if secure else None
+    extra = (*extra, "--secure", str(secure)) if secure else extra
     with tempfile.TemporaryDirectory() as data:
         proc = subprocess.Popen(
             [
@@ -67,7 +75,7 @@ def serve_process(code: Path | None = None, *extra: str) -> Iterator[tuple[str, 
             deadline = time.monotonic() + 20
             while True:
                 try:
-                    with TripleSpace.open(endpoint, space="ping") as ts:
+                    with TripleSpace.open(endpoint, space="ping", identity=identity) as ts:
                         ts.snapshot(timeout=1)
                     break
                 except SpaceError:

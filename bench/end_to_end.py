@@ -43,7 +43,7 @@ from rdflib import Graph, Literal, Namespace, URIRef
 from rules_scaling import PAPER, paper_rules
 
 from agents.view import View
-from space import Change, TripleSpace
+from space import Change, TripleSpace, load_identity
 from space.changeset import hlc_key
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -80,9 +80,13 @@ class RuleSet:
         return [AC[f"setting_{i}"] for i in range(self.extra)] if self.firing else []
 
 
-def agent_commands(endpoint: str, rules: list[Path]) -> dict[str, list[str]]:
-    """Return the command line of each agent process of the bench's robot."""
+def agent_commands(
+    endpoint: str, rules: list[Path], secure: Path | None = None
+) -> dict[str, list[str]]:
+    """Return the command line of each agent process of the bench's robot (`--secure`: mTLS)."""
     common = ["--connect", endpoint, "--space", SPACE, "--robot", "robot1"]
+    if secure is not None:
+        common += ["--secure", str(secure)]
     reasoner = [arg for path in rules for arg in ("--rules", str(path))]
     return {
         "reasoner": ["agents.reasoner", *common, *reasoner],
@@ -225,18 +229,28 @@ def stage(rule_set: RuleSet) -> Graph:
     return graph
 
 
-def measure(runs: int, rule_set: RuleSet, logs: Path) -> list[dict[str, float]]:
-    """Run the robot's processes and time `runs` very low batteries; return their latencies."""
+def measure(
+    runs: int, rule_set: RuleSet, logs: Path, secure: Path | None = None
+) -> list[dict[str, float]]:
+    """Run the robot's processes and time `runs` very low batteries; return their latencies.
+
+    With `secure` (a `tspace certs` directory), every process speaks mTLS as itself
+    and the bench as the operator.
+    """
     rules = [ROOT / "rules" / "selfconfig.rules"]
     if rule_set.extra:
         rules.append(logs / "extra.rules")
         rules[-1].write_text(paper_rules(rule_set.extra))
     settings = rule_set.settings
     observer = Observer()
-    with serve() as endpoint, TripleSpace.open(endpoint, space=SPACE, agent="bench") as ts:
+    identity = load_identity(secure, "operator") if secure else None
+    with (
+        serve(secure) as endpoint,
+        TripleSpace.open(endpoint, space=SPACE, agent="bench", identity=identity) as ts,
+    ):
         ts.write(stage(rule_set))
         ts.subscribe(None, observer.on_change, snapshot=True)
-        with agents(agent_commands(endpoint, rules), logs):
+        with agents(agent_commands(endpoint, rules, secure), logs):
             observer.until(
                 lambda: {"reasoner", HW, NAV, BEHAVIOR} <= observer.writers and observer.at_rest(),
                 "start of the agents",

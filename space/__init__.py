@@ -1,12 +1,23 @@
-"""tspace: a distributed triple space on Eclipse Zenoh."""
+"""tspace: a distributed triple space on Eclipse Zenoh.
 
+This list is the library's API: an application (the robot's agents under
+`agents/`) imports from here and from `space.reasoning`, nothing deeper.
+"""
+
+from space._display import triple_text
+from space._paths import default_data_dir
+from space._ports import any_free_port
+from space._ports import probe as probe_port
+from space._turtle import read_turtle
 from space.ack import Ack, Dropped
 from space.changeset import Changeset
+from space.cli.options import add_connect, identity_of
 from space.client import Transaction, TripleSpace
 from space.errors import (
     ChangesetRejected,
     InputError,
     MalformedPayload,
+    NoReasoner,
     NotApplied,
     QueryError,
     QueryTimeLimit,
@@ -15,26 +26,76 @@ from space.errors import (
     SpaceUnavailable,
     TemplateError,
 )
+from space.explanation import Explanation, Written
+from space.functional import Replacement, declares_functional, replace_functional
+from space.heap import freeze_startup, refreeze
+from space.identity import Identity, load_identity
+from space.keys import ROOT as KEY_ROOT
+from space.keys import escape as escape_key_chunk
+from space.keys import unescape as unescape_key_chunk
+from space.mirror import ChangeRecord, SpaceMirror
+from space.prefixes import PrefixMap
+from space.presence import alive_agents, declare_agent, watch_agents
+from space.request import Pending
+from space.session import check_can_listen
 from space.subscription import Change, Subscription
 from space.template import Template
+from space.terms import Triple, from_nt, triple_to_nt
+from space.why import WhyService
+from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT, make_config
 
 __all__ = [
+    "DEFAULT_ENDPOINT",
+    "KEY_ROOT",
+    "SECURE_ENDPOINT",
     "Ack",
     "Change",
+    "ChangeRecord",
     "Changeset",
     "ChangesetRejected",
     "Dropped",
+    "Explanation",
+    "Identity",
     "InputError",
     "MalformedPayload",
+    "NoReasoner",
     "NotApplied",
+    "Pending",
+    "PrefixMap",
     "QueryError",
     "QueryTimeLimit",
+    "Replacement",
     "SpaceError",
+    "SpaceMirror",
     "SpaceTimeout",
     "SpaceUnavailable",
     "Subscription",
     "Template",
     "TemplateError",
     "Transaction",
+    "Triple",
     "TripleSpace",
+    "WhyService",
+    "Written",
+    "add_connect",
+    "alive_agents",
+    "any_free_port",
+    "check_can_listen",
+    "declare_agent",
+    "declares_functional",
+    "default_data_dir",
+    "escape_key_chunk",
+    "freeze_startup",
+    "from_nt",
+    "identity_of",
+    "load_identity",
+    "make_config",
+    "probe_port",
+    "read_turtle",
+    "refreeze",
+    "replace_functional",
+    "triple_text",
+    "triple_to_nt",
+    "unescape_key_chunk",
+    "watch_agents",
 ]

@@ -12,8 +12,9 @@ import io
 import logging
 import uuid
 from collections.abc import Iterable, Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from types import TracebackType
+from typing import TYPE_CHECKING
 
 import zenoh
 from rdflib import Graph, URIRef
@@ -22,13 +23,24 @@ from rdflib.query import Result
 from space import keys
 from space.ack import Ack
 from space.changeset import Changeset, pack, unpack
-from space.errors import MalformedPayload, QueryError, TemplateError
+from space.errors import (
+    MalformedPayload,
+    NoReasoner,
+    QueryError,
+    SpaceTimeout,
+    SpaceUnavailable,
+    TemplateError,
+)
+from space.explanation import Explanation
 from space.prefixes import PrefixMap
 from space.request import Pending, ask_store
 from space.session import open_session
 from space.subscription import Callback, Change, Dispatcher, Subscription
 from space.template import Template
 from space.terms import CACHED, Triple, triple_from_nt
+
+if TYPE_CHECKING:
+    from space.identity import Identity
 
 log = logging.getLogger("tspace.client")
 
@@ -52,11 +64,15 @@ class TripleSpace:
         agent: str | None = None,
         prefixes: dict[str, str] | None = None,
         strict: bool = False,
+        writer: str | None = None,
         _owns_session: bool = False,
     ) -> None:
         self.session = session
         self.strict = strict
         self.space = keys.check_space(space)
+        # In a secure space a router lets each identity write (and take) only on
+        # keys that end with its own name, so the store knows who wrote.
+        self.writer = writer
         self.agent = agent or f"client-{session.zid()}"
         self.prefixes = PrefixMap(prefixes)
         self._owns_session = _owns_session
@@ -75,13 +91,16 @@ class TripleSpace:
         mode: str = "client",
         prefixes: dict[str, str] | None = None,
         strict: bool = False,
+        identity: Identity | None = None,
     ) -> TripleSpace:
         """Open a session to the routers at `connect` and a handle on `space`.
 
         Blocks until a router is reached. `prefixes` (name -> namespace IRI) are
         used in templates and sent with the changesets that use them, so the
         space learns them too. With `strict`, a write some of whose triples the
-        store did not apply raises `NotApplied` (see `send`).
+        store did not apply raises `NotApplied` (see `send`). With `identity`
+        (`space.load_identity`), every link is mutual TLS with its certificate,
+        and writes go under its name.
 
         Raises:
             InputError: `space` is not a legal space name (checked before connecting).
@@ -90,26 +109,38 @@ class TripleSpace:
         """
         keys.check_space(space)
         endpoints = [connect] if isinstance(connect, str) else connect
-        session = open_session(endpoints, mode=mode, config_file=config_file)
+        session = open_session(endpoints, mode=mode, config_file=config_file, identity=identity)
+        writer = identity.name if identity is not None else None
         try:
             return cls(
-                session, space, agent=agent, prefixes=prefixes, strict=strict, _owns_session=True
+                session,
+                space,
+                agent=agent,
+                prefixes=prefixes,
+                strict=strict,
+                writer=writer,
+                _owns_session=True,
             )
         except BaseException:
             session.close()
             raise
 
     def close(self) -> None:
-        """Undeclare every subscription and close the session if this handle opened it."""
-        for sub in list(self._subscriptions):
-            sub.close()
-        self._subscriptions.clear()
-        for watchdog in self._watchdogs:
-            watchdog.undeclare()
-        self._watchdogs = []
-        self._dispatcher.close()
-        if self._owns_session:
-            self.session.close()
+        """Undeclare every subscription and close the session if this handle opened it.
+
+        Each step runs even when an earlier one raised (its error is re-raised after):
+        a session left open keeps the process from exiting.
+        """
+        subscriptions, self._subscriptions = list(self._subscriptions), set()
+        watchdogs, self._watchdogs = self._watchdogs, []
+        with ExitStack() as steps:  # run in reverse: subscriptions first, the session last
+            if self._owns_session:
+                steps.callback(self.session.close)
+            steps.callback(self._dispatcher.close)
+            for watchdog in watchdogs:
+                steps.callback(watchdog.undeclare)
+            for sub in subscriptions:
+                steps.callback(sub.close)
 
     def __enter__(self) -> TripleSpace:
         return self
@@ -123,7 +154,10 @@ class TripleSpace:
         self.close()
 
     def _key(self, service: str) -> str:
-        return keys.service_key(self.space, service)
+        key = keys.service_key(self.space, service)
+        if self.writer is not None and service in ("write", "query"):
+            return f"{key}/{self.writer}"
+        return key
 
     # Writing
 
@@ -339,6 +373,64 @@ class TripleSpace:
             return Result.parse(io.BytesIO(body), format="json")
         except ValueError as exc:
             raise QueryError(f"unreadable SPARQL result: {exc}") from exc
+
+    def seq(self, *, timeout: float = 5.0) -> int:
+        """Return the space's sequence number now (how many changesets it has applied).
+
+        Raises:
+            SpaceUnavailable, SpaceTimeout: as `query`.
+        """
+        return self._seq(timeout)
+
+    def history(
+        self, first: int = 1, last: int = 0, *, timeout: float = 5.0
+    ) -> tuple[list[Changeset], int]:
+        """Return the changesets `first..last` the store's log still keeps, oldest first.
+
+        `last` 0 means up to the newest. Also returns the space's sequence number
+        now. The store keeps a bounded log (`tspace serve --log-keep`): older
+        changesets are gone and simply missing from the answer.
+
+        Raises:
+            SpaceUnavailable, SpaceTimeout: as `query`.
+            MalformedPayload: the store sent a changeset that cannot be read.
+        """
+        request = {"from": max(1, first)}
+        if last:
+            request["to"] = last
+        key = self._key("log")
+        reply = ask_store(self.session, key, pack(request), timeout, what="log request")
+        changes = [Changeset.decode(bytes(p), published=True) for p in reply.get("changes") or ()]
+        return changes, int(reply.get("seq") or 0)
+
+    def why(
+        self, template: TemplateLike = None, *, limit: int = 20, timeout: float = 5.0
+    ) -> list[Explanation]:
+        """Return why each triple matching `template` holds (at most `limit` of them).
+
+        The space's reasoner answers (on `@/why`, see docs/wire-format.md): for
+        each matching triple, the rule that concluded it with the comment above
+        the rule in its file, the facts the rule matched, explained in turn, down
+        to what agents wrote, with who wrote it and when. A triple that does not
+        hold has no explanation: no match gives an empty list.
+
+        Raises:
+            NoReasoner: no reasoner answered within `timeout`.
+            QueryError: the reasoner refused the request.
+        """
+        t = self._template(template)
+        request = {"template": t.to_wire(), "limit": int(limit)}
+        try:
+            reply = ask_store(self.session, self._key("why"), pack(request), timeout, what="why")
+        except (SpaceUnavailable, SpaceTimeout) as exc:
+            raise NoReasoner(
+                f"no reasoner answered on space {self.space!r} within {timeout:g} s "
+                "(is one running? `tspace up` starts one)"
+            ) from exc
+        found = reply.get("explanations") or []
+        if not isinstance(found, list):
+            raise MalformedPayload("the reasoner's 'explanations' is not a list")
+        return [Explanation.from_wire(w) for w in found]
 
     # Watching
 

@@ -19,6 +19,10 @@ class ConfigError(SpaceError, ValueError):
     """A Zenoh endpoint or configuration file given by the user is malformed."""
 
 
+class NoReasoner(SpaceUnavailable):
+    """No reasoner answered a `why` (none runs on the space, or it did not answer in time)."""
+
+
 class ListenFailed(SpaceError):
     """A router could not listen on an endpoint (address in use, not an address of this host)."""
 

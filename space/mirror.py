@@ -1,26 +1,41 @@
-"""A local copy of a space, kept current by one subscription with snapshot.
+"""The one local copy of a space: the triples seen, kept current by changes.
 
-The live view, the scenario checker and the HMI all need the whole robot state
-at once and a way to wait for it to change; they read this copy instead of
-querying the store on every refresh. Changes arrive on the client library's
-dispatcher thread (never a Zenoh callback); `watch` reacts to each one.
+Agents decide from it instead of asking the store on every tick, so a slow or
+absent store never stalls a control loop; the live view, the scenario checker
+and the HMI read the whole state from it at once. It holds the union of the
+asserted and inferred graphs, as a snapshot reports it, and remembers which
+graph each triple came from, so a triple both asserted and inferred stays
+until both are gone. A functional property's new value replaces the old one
+(`space.functional`), even when a change arrives before the removal it implies.
+
+Owned by one thread (an agent's loop: `apply`, then read `graph`), or fed by a
+subscription (`attach`: changes arrive on the client's dispatcher thread; read
+with `copy()`, `version`, `recent()`, which take the lock).
 """
 
 from __future__ import annotations
 
 import threading
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from datetime import datetime
 from typing import TYPE_CHECKING
 
-from rdflib import Graph
+from rdflib import RDF, Graph, Literal
+from rdflib.term import Node
 
+from space.functional import declares_functional, replace_functional
+from space.memory import BulkMemory
 from space.terms import Triple
 
 if TYPE_CHECKING:
-    from space import Change, Subscription, TripleSpace
+    from space.changeset import Changeset
+    from space.client import TripleSpace
+    from space.subscription import Change, Subscription
+
+# Which graph a triple is held for; a snapshot merges both, so its triples are "either".
+ASSERTED, INFERRED, EITHER = 1, 2, 4
 
 
 @dataclass(frozen=True)
@@ -60,22 +75,87 @@ class ChangeRecord:
 
 
 class SpaceMirror:
-    """Keep the asserted and inferred graphs of a space in memory.
+    """Keep a space's triples in memory, with the lookups deciding from them needs.
 
     Args:
-        history: how many recent changesets to remember for `recent`.
+        triples: the triples to start from (held as asserted).
+        history: how many recent changesets to remember for `recent` (attached only).
+        skip_subjects: leave out triples whose subject starts with this prefix.
+
+    Attributes:
+        graph: the live union graph; read it only from the thread that applies changes.
     """
 
-    def __init__(self, history: int = 200) -> None:
-        self._asserted = Graph()
-        self._inferred = Graph()
-        self._snapshot = Graph()
+    def __init__(
+        self,
+        triples: Iterable[Triple] = (),
+        *,
+        history: int = 200,
+        skip_subjects: str | None = None,
+    ) -> None:
+        self._store = BulkMemory()
+        self.graph = Graph(store=self._store)
+        self._origins: dict[Triple, int] = {}
+        self._functional: set[Node] = set()
+        self._skip = skip_subjects
         self._recent: deque[ChangeRecord] = deque(maxlen=history)
         self._version = 0
         self._lock = threading.Lock()
         self._subscription: Subscription | None = None
         self._space: TripleSpace | None = None
         self._watchers: list[Callable[[], None]] = []
+        self.add(triples)
+
+    # Keeping it current
+
+    def apply(self, change: Changeset, *, snapshot: bool = False) -> None:
+        """Apply a changeset: removals first, as the store applies them, then additions.
+
+        With `snapshot`, the change is a subscription's snapshot: its additions
+        merge both graphs, and they leave with the first removal from either.
+        """
+        with self._lock:
+            self._remove(change.removed, ASSERTED)
+            self._remove(change.inferred_removed, INFERRED)
+            self._add(change.added, EITHER if snapshot else ASSERTED)
+            self._add(change.inferred_added, INFERRED)
+            self._version += 1
+
+    def add(self, triples: Iterable[Triple]) -> None:
+        """Add asserted triples; a functional property's new value replaces the old one."""
+        with self._lock:
+            self._add(triples, ASSERTED)
+
+    def remove(self, triples: Iterable[Triple]) -> None:
+        """Remove asserted triples (absent ones are ignored)."""
+        with self._lock:
+            self._remove(triples, ASSERTED)
+
+    def _add(self, triples: Iterable[Triple], origin: int) -> None:
+        store, origins, functional, skip = self._store, self._origins, self._functional, self._skip
+        triples = [t for t in triples if skip is None or not t[0].startswith(skip)]
+        functional.update(t[0] for t in triples if declares_functional(t))
+        change = replace_functional(triples, functional.__contains__, store.objects_of)
+        for old in change.replaced:
+            origins.pop(old, None)
+            store.discard(old)
+        for triple in change.kept:
+            origins[triple] = origins.get(triple, 0) | origin
+            store.put(triple)
+
+    def _remove(self, triples: Iterable[Triple], origin: int) -> None:
+        store, origins = self._store, self._origins
+        for triple in triples:
+            left = origins.get(triple, 0) & ~(origin | EITHER)
+            if left:
+                origins[triple] = left
+                continue
+            origins.pop(triple, None)
+            if declares_functional(triple):
+                self._functional.discard(triple[0])
+            store.discard(triple)
+
+    # Fed by a subscription
 
     def watch(self, watcher: Callable[[], None]) -> None:
         """Call `watcher` after each changeset is applied, before the next one.
@@ -102,40 +182,23 @@ class SpaceMirror:
         self._space = None
 
     def _on_change(self, change: Change) -> None:
+        self.apply(change, snapshot=self._version == 0)
         with self._lock:
-            # Removals first, as the store applies them.
-            for triple in (*change.removed, *change.inferred_removed):
-                self._snapshot.remove(triple)
-            for triple in change.removed:
-                self._asserted.remove(triple)
-            for triple in change.inferred_removed:
-                self._inferred.remove(triple)
-            # The snapshot merges both graphs: keep its triples apart until a later
-            # change removes them from whichever graph they were in.
-            for triple in change.added:
-                (self._snapshot if self._version == 0 else self._asserted).add(triple)
-            for triple in change.inferred_added:
-                self._inferred.add(triple)
             self._recent.append(ChangeRecord.of(change))
-            self._version += 1
         for watcher in self._watchers:
             watcher()
 
     @property
     def version(self) -> int:
-        """Return how many changesets (the snapshot included) have been applied."""
+        """Return how many changesets (a snapshot included) have been applied."""
         with self._lock:
             return self._version
 
-    def graph(self) -> Graph:
-        """Return a copy of the union of asserted and inferred triples."""
+    def copy(self) -> Graph:
+        """Return a copy of the union graph; safe from any thread."""
         union = Graph()
         with self._lock:
-            for triple in self._asserted:
-                union.add(triple)
-            for triple in self._inferred:
-                union.add(triple)
-            for triple in self._snapshot:
+            for triple in self._origins:
                 union.add(triple)
         return union
 
@@ -143,3 +206,41 @@ class SpaceMirror:
         """Return the remembered changesets, oldest first."""
         with self._lock:
             return list(self._recent)
+
+    # Lookups (owner thread)
+
+    def __len__(self) -> int:
+        return len(self._origins)
+
+    def is_functional(self, predicate: Node) -> bool:
+        """Return True if the copy declares `predicate` an owl:FunctionalProperty."""
+        return predicate in self._functional
+
+    def value(self, subject: Node | None, predicate: Node) -> Node | None:
+        """Return one object of (subject, predicate) (the least, for determinism), or None."""
+        if subject is None:
+            return None
+        return next(iter(sorted(self.graph.objects(subject, predicate))), None)
+
+    def text(self, subject: Node | None, predicate: Node) -> str | None:
+        """Return the lexical form of one object of (subject, predicate), or None."""
+        found = self.value(subject, predicate)
+        return None if found is None else str(found)
+
+    def number(self, subject: Node | None, predicate: Node) -> float | None:
+        """Return one numeric object of (subject, predicate), or None if absent or not a number."""
+        found = self.value(subject, predicate)
+        if not isinstance(found, Literal):
+            return None
+        try:
+            return float(found)
+        except ValueError:
+            return None
+
+    def objects(self, subject: Node, predicate: Node) -> list[Node]:
+        """Return the objects of (subject, predicate), sorted for determinism."""
+        return sorted(self.graph.objects(subject, predicate))
+
+    def has_type(self, subject: Node, cls: Node) -> bool:
+        """Return True if `subject rdf:type cls` is in the copy."""
+        return (subject, RDF.type, cls) in self.graph

@@ -11,11 +11,15 @@ from pathlib import Path
 
 import zenoh
 
+from space.errors import InputError
 from space.heap import freeze_startup
+from space.identity import Identity
 from space.session import open_router
+from space.store.guard import WriteGuard
 from space.store.server import StoreServer
 
 log = logging.getLogger("tspace.serve")
+DEFAULT_POLICY = Path("deploy/policy.toml")  # in the current directory
 
 
 @contextmanager
@@ -30,16 +34,26 @@ def open_server(
     config_file: str | None = None,
     connect: list[str] | None = None,
     store: bool = True,
+    identity: Identity | None = None,
+    policy_file: str | Path | None = None,
 ) -> Iterator[StoreServer | None]:
     """Open a router-mode Zenoh session with the store on it (unless `store=False`); close both.
 
+    With `identity`, the router speaks mutual TLS only and enforces the policy
+    (`policy_file`, default `DEFAULT_POLICY`) on its clients, and
+    the store checks every write against it.
+
     Raises:
+        InputError: the policy file is missing, cannot be read or is malformed.
         ConfigError: an endpoint or the configuration file is malformed.
         ListenFailed: the router cannot listen (the port is taken, say).
     """
-    from space.paths import default_data_dir
+    from space._paths import default_data_dir
 
-    session = open_router(listen, connect=connect, config_file=config_file)
+    guard, acl = _secure_parts(identity, policy_file)
+    session = open_router(
+        listen, connect=connect, config_file=config_file, identity=identity, access_control=acl
+    )
     try:
         listener = session.info.declare_transport_events_listener(_log_transport)
         # Meshed with other routers, a store first looks a while for a leading store there.
@@ -51,6 +65,7 @@ def open_server(
             query_timeout=query_timeout,
             max_spaces=max_spaces,
             look_for_leader=2.0 if connect else 0.0,
+            guard=guard,
         )
         if store:
             server.start()
@@ -61,6 +76,22 @@ def open_server(
             listener.undeclare()
     finally:
         session.close()
+
+
+def _secure_parts(
+    identity: Identity | None, policy_file: str | Path | None
+) -> tuple[WriteGuard | None, dict | None]:
+    """Return the store's write guard and the router's access control, or None, None."""
+    if identity is None:
+        return None, None
+    from space._acl import access_control
+    from space._policy import read_policy
+
+    if policy_file is None and not DEFAULT_POLICY.exists():
+        raise InputError(f"secure mode needs a policy: --policy FILE (no {DEFAULT_POLICY} here)")
+    policy = read_policy(policy_file or DEFAULT_POLICY)
+    log.info("secure: mTLS as %s; %d identities in the policy", identity.name, len(policy.roles))
+    return WriteGuard(policy), access_control(policy)
 
 
 def _log_transport(event: zenoh.TransportEvent) -> None:

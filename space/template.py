@@ -12,7 +12,7 @@ from rdflib.term import Node
 
 from space.errors import TemplateError
 from space.prefixes import PrefixMap
-from space.terms import Triple, to_nt
+from space.terms import Triple, to_nt, unescape
 
 Slot = Node | None
 
@@ -161,7 +161,7 @@ def _slot(match: re.Match[str], prefixes: PrefixMap, text: str) -> Slot:
         return BNode(token[2:])
     if kind == "pname":
         return RDF.type if token == "a" else _expand(token, prefixes, text)
-    body = token[1:-1].encode("utf-8").decode("unicode_escape") if "\\" in token else token[1:-1]
+    body = unescape(token[1:-1])
     if match.group("lang"):
         return Literal(body, lang=match.group("lang"))
     datatype = match.group("dt")

@@ -31,7 +31,12 @@ _XSD_STRING = "http://www.w3.org/2001/XMLSchema#string"
 CACHED = 4096  # terms (or triples) each cache holds: a fleet's recurring ones, not its history
 
 
-def _unescape(text: str) -> str:
+def unescape(text: str) -> str:
+    """Return the string an N-Triples or Turtle string body (between its quotes) stands for.
+
+    The one reader of `\\t \\n \\" \\uXXXX ...` escapes for the term syntax, templates and
+    rule files alike; an escape it does not know stays as written.
+    """
     if "\\" not in text:
         return text
 
@@ -76,7 +81,7 @@ def from_nt(text: str) -> Node:
         if match is None:
             raise MalformedPayload(f"not an N-Triples literal: {text!r}")
         lexical, datatype, lang = match.groups()
-        value = _unescape(lexical)
+        value = unescape(lexical)
         if lang:
             return Literal(value, lang=lang)
         if datatype and datatype != _XSD_STRING:

@@ -131,10 +131,11 @@ def test_production_rules_see_inferred_triples():
     assert delta.inferred_added == ((EX.s, EX.kind, EX.Device),)
 
 
-def test_a_runaway_rule_set_is_stopped_and_undone():
+def test_a_runaway_rule_set_is_stopped_its_firings_undone_the_callers_triples_kept():
     rules = """
     [ping: (?x ex:state 'a') -> drop(0), (?x ex:state 'b')]
     [pong: (?x ex:state 'b') -> drop(0), (?x ex:state 'a')]
+    [kind: (?x ex:state ?s) -> (?x ex:kind ex:Stateful)]
     """
     e = engine(rules, max_firings=50)
     e.load([(EX.x, EX.other, Literal(1))])
@@ -143,6 +144,11 @@ def test_a_runaway_rule_set_is_stopped_and_undone():
         e.apply(added=[(EX.x, EX.state, Literal("a"))])
     assert set(caught.value.rules) == {"ping", "pong"}
     assert "ping" in str(caught.value) and "pong" in str(caught.value)
-    assert set(e.graph) == before
+    mine, concluded = (EX.x, EX.state, Literal("a")), (EX.x, EX.kind, EX.Stateful)
+    assert set(e.graph) == before | {mine, concluded}
+    assert caught.value.kept is not None
+    assert caught.value.kept.asserted_added == ()  # the caller knows its own triples
+    assert caught.value.kept.inferred_added == (concluded,)
+    assert caught.value.kept.firings == ()
     e.apply(added=[(EX.x, EX.other, Literal(2))])
     assert (EX.x, EX.other, Literal(2)) in e

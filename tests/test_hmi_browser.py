@@ -1,16 +1,23 @@
-"""The HMI page in a real headless Chromium: live robot state, assigning a task, the battery.
+"""The HMI page in a real headless Chromium: live state, tasks, the battery, plots, why, safety.
 
 Chromium is driven over the Chrome DevTools protocol (websocket-client), clicks
 are real mouse events at the buttons' positions. Needs Debian's `chromium`.
+Screenshots of the scenario at 1024 and 1920 px go to bench/out/ (for the docs).
 """
 
 from __future__ import annotations
 
+import base64
+import contextlib
 import itertools
 import json
+import os
 import shutil
+import signal
+import socket
 import subprocess
 import time
+import urllib.error
 import urllib.request
 from pathlib import Path
 
@@ -81,11 +88,15 @@ class Browser:
             start_new_session=True,
         )
         self._ids = itertools.count(1)
-        port_file = profile / "DevToolsActivePort"
-        wait_for(lambda: port_file.is_file() and port_file.read_text().strip(), 30, "Chromium")
-        port = int(port_file.read_text().split()[0])
-        page = wait_for(lambda: self._page(port), 10, "Chromium's page")
-        self.ws = websocket.create_connection(page, timeout=10, suppress_origin=True)
+        try:
+            port_file = profile / "DevToolsActivePort"
+            wait_for(lambda: port_file.is_file() and port_file.read_text().strip(), 30, "Chromium")
+            port = int(port_file.read_text().split()[0])
+            page = wait_for(lambda: self._page(port), 10, "Chromium's page")
+            self.ws = websocket.create_connection(page, timeout=10, suppress_origin=True)
+        except BaseException:
+            self.close()  # a browser that never answered is still a process group to end
+            raise
 
     @staticmethod
     def _page(port: int) -> str | None:
@@ -94,10 +105,14 @@ class Browser:
         return next((t["webSocketDebuggerUrl"] for t in targets if t["type"] == "page"), None)
 
     def close(self) -> None:
-        if hasattr(self, "ws"):
-            self.ws.close()
-        self.proc.kill()
-        self.proc.wait()
+        try:
+            if hasattr(self, "ws"):
+                self.ws.close()
+        finally:
+            # Chromium's renderer and zygote processes share its session: end them all.
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
 
     def call(self, method: str, **params: object) -> dict:
         """Send one DevTools command and return its result (events in between are skipped)."""
@@ -130,6 +145,41 @@ class Browser:
                 return true; }})()"""
         )
         assert found, f"no option {value!r} in {selector}"
+
+    def navigate(self, url: str) -> None:
+        """Load a page and wait until its document is complete."""
+        self.call("Page.navigate", url=url)
+        wait_for(lambda: self.js("document.readyState") == "complete", 20, f"{url} to load")
+
+    def screenshot(self, path: Path, width: int) -> None:
+        """Lay the page out `width` px wide and save the whole page as a PNG."""
+        self.call(
+            "Emulation.setDeviceMetricsOverride",
+            width=width,
+            height=900,
+            deviceScaleFactor=1,
+            mobile=False,
+        )
+        # Wait for the relayout: the charts follow their boxes' new width.
+        wait_for(
+            lambda: self.js(
+                "[...document.querySelectorAll('.chart')].every(c => "
+                "Math.abs(c.querySelector('.uplot').offsetWidth - c.clientWidth) < 40)"
+            ),
+            10,
+            f"the charts at {width} px",
+        )
+        height = self.js("Math.ceil(document.documentElement.scrollHeight)")
+        self.call(
+            "Emulation.setDeviceMetricsOverride",
+            width=width,
+            height=height,
+            deviceScaleFactor=1,
+            mobile=False,
+        )
+        shot = self.call("Page.captureScreenshot", format="png")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(base64.b64decode(shot["data"]))
 
     def click(self, selector: str) -> None:
         """Click the middle of an element with the mouse."""
@@ -195,6 +245,14 @@ def test_the_page_shows_the_robot_live_and_assigns_a_task(page, deployment):
     )
 
 
+def firing_texts(page: Browser) -> list[str]:
+    """Return the robot's firings as the page lists them: sentence, then the raw triples."""
+    return page.js(
+        f"[...document.querySelectorAll('{ROBOT} .firings li')].map(li => "
+        "li.querySelector('.sentence').textContent + ' | ' + li.querySelector('pre').textContent)"
+    )
+
+
 def test_a_very_low_battery_set_from_the_page_fires_the_papers_rules(page, deployment):
     wait_for(lambda: page.text("#status") == "live", 30, "the page to go live")
     wait_for(lambda: page.text(f"{ROBOT} [data-field=task_type]") == "Idle", 30, "the robot")
@@ -202,18 +260,16 @@ def test_a_very_low_battery_set_from_the_page_fires_the_papers_rules(page, deplo
     started = time.monotonic()
     page.click(f"{ROBOT} .set-battery")
 
-    def firings() -> list[str]:
-        return page.js("[...document.querySelectorAll('#firings li')].map(li => li.textContent)")
+    def fired(sentence: str, triple: str) -> bool:
+        return any(sentence in f and triple in f for f in firing_texts(page))
 
-    def fired(text: str) -> bool:
-        return any(text in f and "very low" in f for f in firings())
-
-    wait_for(lambda: fired("ac:robot1_base ac:motion_speed low"), 30, "the low speed rule")
-    wait_for(lambda: fired("ac:robot1 ac:current_task ac:task_going_to_dock"), 30, "go to dock")
-    wait_for(lambda: fired("ac:robot1_screen ac:running_mode stand-by"), 30, "stand-by rule")
+    # Each firing reads as a sentence; its triples are there on demand, with its rules and cause.
+    sentence = "battery very low → robot1 goes to the dock"
+    wait_for(lambda: fired(sentence, "ac:robot1 ac:current_task ac:task_going_to_dock"), 30)
+    wait_for(lambda: fired("at low speed", 'ac:robot1_base ac:motion_speed "low"'), 30)
     assert time.monotonic() - started < 30
-    line = next(f for f in firings() if "ac:motion_speed low" in f)
-    assert " <- " in line or " ← " in line, line  # the cause is shown
+    line = next(f for f in firing_texts(page) if '+ ac:robot1_base ac:motion_speed "low"' in f)
+    assert "verylow_battery_causes_low_speed_existing" in line and " ← hmi" in line, line
 
 
 def test_a_battery_level_set_from_the_page_holds_and_the_robot_acts_on_it(page, deployment):
@@ -235,3 +291,120 @@ def test_a_battery_level_set_from_the_page_holds_and_the_robot_acts_on_it(page, 
         )
     assert page.text(f"{ROBOT} [data-field=battery]").startswith("low ("), page.text("#robots")
     assert page.text(f'{ROBOT} tr[data-device="robot1_screen"] [data-field=mode]') == "stand-by"
+
+
+def chart_values(page: Browser, series: int) -> list[float]:
+    """Return the values of one series of the robot's chart (1: battery %, 2: speed)."""
+    return page.js(
+        f"(() => {{ const c = [...document.querySelectorAll('{ROBOT} .chart')][0]; "
+        f"const u = c && c.querySelector('.uplot') && window.__charts?.get('robot1'); "
+        f"return u ? u.data[{series}].filter(v => v !== null) : []; }})()"
+    )
+
+
+def task_spans(page: Browser) -> list[str]:
+    """Return the task values laid on the robot's timeline, oldest first."""
+    return page.js(
+        f"[...document.querySelectorAll('{ROBOT} .lane.task .span')].map(s => s.textContent)"
+    )
+
+
+def test_the_scenario_through_the_page_plots_the_battery_and_the_docking(page, deployment):
+    """Send the robot to a patient, drain its battery from the page: plot, timeline, why."""
+    wait_for(lambda: page.text("#status") == "live", 30, "the page to go live")
+    wait_for(lambda: page.text(f"{ROBOT} [data-field=task_type]") == "Idle", 30, "the robot")
+    # The battery control starts at the battery's level, not at the lowest one.
+    assert page.js(f"document.querySelector('{ROBOT} .battery-select').value") == "normal"
+    page.choose(f"{ROBOT} .task-select", "AttendingPatient")
+    page.choose(f"{ROBOT} .person-select", "patient_ane")
+    page.click(f"{ROBOT} .assign-task")
+    wait_for(lambda: page.text(f"{ROBOT} [data-field=location]") != "dock1", 30, "leaving")
+    page.choose(f"{ROBOT} .battery-select", "very low")
+    page.click(f"{ROBOT} .set-battery")
+    wait_for(lambda: "GoingToDock" in task_spans(page), 30, "going to the dock on the timeline")
+    wait_for(
+        lambda: page.text(f"{ROBOT} [data-field=location]") == "dock1", 60, "the robot to dock"
+    )
+    # The plot shows the drop: a normal charge, then a very low one.
+    charges = chart_values(page, 1)
+    assert max(charges) >= 50 and min(charges) < 15, charges
+    assert 1 in chart_values(page, 2)  # the low speed, on the speed axis
+    spans = task_spans(page)
+    assert spans.index("AttendingPatient") < spans.index("GoingToDock"), spans
+    screen = f"{ROBOT} .lane.mode .span.stand-by"
+    wait_for(lambda: page.js(f"document.querySelectorAll('{screen}').length >= 3"), 30)
+    marks = page.js(f"document.querySelectorAll('{ROBOT} .timeline .mark').length")
+    assert marks >= 1
+
+    # A firing's why, one click away: the rule, its comment, down to who wrote the battery.
+    sentences = page.js(
+        f"[...document.querySelectorAll('{ROBOT} .firings .sentence')].map(s => s.textContent)"
+    )
+    n = next(i for i, s in enumerate(sentences) if s.startswith("battery very low →")) + 1
+    page.click(f"{ROBOT} .firings li:nth-child({n}) .why-link")
+    wait_for(lambda: page.js("document.getElementById('why-dialog').open"), 10, "the why dialog")
+    wait_for(lambda: "by production rule" in (page.text("#why-body") or ""), 20, "the answer")
+    answer = page.text("#why-body")
+    assert "written by hmi" in answer, answer
+
+    out = REPO / "bench" / "out"
+    page.screenshot(out / "hmi-why-1024.png", 1024)
+    page.click("#why-close")
+    for width in (1024, 1920):
+        page.screenshot(out / f"hmi-{width}.png", width)
+        overflow = page.js("document.documentElement.scrollWidth - window.innerWidth")
+        assert overflow <= 0, f"{overflow} px too wide at {width} px"
+
+    # The history is the space's, not the page's: a reload shows it again.
+    page.navigate(f"http://127.0.0.1:{deployment.hmi_port}/")
+    wait_for(lambda: "GoingToDock" in task_spans(page), 30, "the history after a reload")
+    wait_for(lambda: min(chart_values(page, 1) or [100]) < 15, 10, "the plotted drop")
+
+
+def post(url: str, body: dict, headers: dict[str, str]) -> int:
+    request = urllib.request.Request(
+        url, data=json.dumps(body).encode(), headers=headers, method="POST"
+    )
+    try:
+        with urllib.request.urlopen(request, timeout=10) as reply:
+            return reply.status
+    except urllib.error.HTTPError as exc:
+        return exc.code
+
+
+def test_a_cross_origin_post_is_refused_and_changes_nothing(page, deployment):
+    base = f"http://127.0.0.1:{deployment.hmi_port}"
+    wait_for(lambda: page.text("#status") == "live", 30, "the page to go live")
+    wait_for(lambda: page.text(f"{ROBOT} [data-field=task_type]") == "Idle", 30, "the robot")
+    # Another origin's page (here: the same server by another name) makes the browser POST,
+    # as any web page can; the request is refused.
+    page.navigate(f"http://localhost:{deployment.hmi_port}/")
+    result = page.call(
+        "Runtime.evaluate",
+        expression=f"""fetch("{base}/api/battery", {{method: "POST", mode: "no-cors",
+             credentials: "include", body: JSON.stringify({{robot: "robot1", level: "empty"}})}})
+             .then(() => "answered", e => String(e))""",
+        awaitPromise=True,
+        returnByValue=True,
+    )
+    assert result["result"]["value"] == "answered", result  # the server had it, and refused it
+    # Without the token, from a foreign Origin, or by a foreign host name: 403.
+    with urllib.request.urlopen(f"{base}/", timeout=10) as reply:
+        cookie = reply.headers["Set-Cookie"].split(";")[0]
+        token = reply.read().decode().split('name="hmi-token" content="')[1].split('"')[0]
+    body = {"robot": "robot1", "level": "very low"}
+    good = {"Origin": base, "Cookie": cookie, "X-HMI-Token": token}
+    assert post(f"{base}/api/battery", body, {**good, "Origin": "http://evil.example"}) == 403
+    no_origin = {k: v for k, v in good.items() if k != "Origin"}
+    assert post(f"{base}/api/battery", body, no_origin) == 403
+    assert post(f"{base}/api/battery", body, {**good, "X-HMI-Token": "0" * 32}) == 403
+    assert post(f"{base}/api/battery", body, {**good, "Host": "evil.example"}) == 403
+    with TripleSpace.open(f"tcp/127.0.0.1:{deployment.port}", space="ward") as ts:
+        assert value(ts, AC.robot1_battery, AC.battery_level) == Literal("normal")
+    # The HMI serves this machine only (127.0.0.1), unless `--hmi-listen` says otherwise.
+    with pytest.raises(ConnectionRefusedError):
+        socket.create_connection(("127.0.0.2", deployment.hmi_port), timeout=5).close()
+    # The page's own request, with its session's token and Origin, goes through.
+    assert post(f"{base}/api/battery", body, good) == 200
+    with TripleSpace.open(f"tcp/127.0.0.1:{deployment.port}", space="ward") as ts:
+        assert value(ts, AC.robot1_battery, AC.battery_level) == Literal("very low")

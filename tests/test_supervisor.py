@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from space.supervisor import ProcessSpec, Supervisor
+from agents.runtime.supervisor import ProcessSpec, Supervisor
 
 SLEEPER = (sys.executable, "-c", "import time; time.sleep(60)")
 
@@ -116,7 +116,7 @@ def test_children_die_with_a_supervisor_killed_by_sigkill(tmp_path):
         f"""
         import sys, time
         from pathlib import Path
-        from space.supervisor import ProcessSpec, Supervisor
+        from agents.runtime.supervisor import ProcessSpec, Supervisor
         sup = Supervisor(log_dir=Path({str(tmp_path)!r}), on_event=print)
         print(sup.start(ProcessSpec("orphan", {SLEEPER!r})), flush=True)
         time.sleep(60)

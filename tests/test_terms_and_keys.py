@@ -73,3 +73,39 @@ def test_template_key_turns_variables_into_wildcards():
 def test_key_with_unknown_prefix_is_rejected():
     with pytest.raises(MalformedPayload):
         parse_triple_key("tspace/s/t/zz:a/zz:b/zz:c", PrefixMap())
+
+
+TRICKY = [
+    'café "x"',
+    "naïve\\path",
+    "tab\there\nnewline",
+    "日本語 ☃ 𝄞",
+    "quote ' and \\u0041 literal",
+]
+
+
+def test_every_string_round_trips_through_the_term_codec():
+    for text in TRICKY:
+        for term in (
+            Literal(text),
+            Literal(text, lang="fr"),
+            Literal(text, datatype=URIRef("http://www.w3.org/2001/XMLSchema#token")),
+        ):
+            assert from_nt(to_nt(term)) == term
+
+
+def test_a_template_reads_non_ascii_and_escapes_as_turtle_does():
+    from space import Template
+
+    template = Template.parse('?s ?p "café \\"x\\" \\u00e9\\n"')
+    assert template.pattern()[2] == Literal('café "x" é\n')
+
+
+def test_a_rule_file_reads_literals_as_jena_does():
+    """Jena's rule tokenizer keeps the character after a backslash as it is (no \\t, no \\u)."""
+    from space.reasoning import default_registry, parse_rules
+
+    rules = parse_rules(
+        '[r: (?s <http://e/p> "café \\"x\\"\\t") -> (?s <http://e/q> "ok")]', default_registry()
+    )
+    assert rules[0].body[0].o == Literal('café "x"t')

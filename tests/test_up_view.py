@@ -84,7 +84,7 @@ def readable(line: str) -> bool:
 
 
 def test_firing_lines_use_prefixed_names_and_leave_anonymous_classes_out(tmp_path):
-    with Up(tmp_path, launch_file(tmp_path, REASONER)) as up:
+    with Up(tmp_path, launch_file(tmp_path, REASONER), "--raw-firings") as up:
         up.wait_started()
         up.wait_connected("reasoner", "hmi")
         with TripleSpace.open(f"tcp/127.0.0.1:{up.port}", space="ward") as ts:

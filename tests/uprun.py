@@ -43,7 +43,8 @@ class Up:
     """Run `tspace up` on free ports and a fresh data dir, collecting stdout and stderr.
 
     `launch` None runs the default launch file; `name_hmi_port` False lets `tspace up`
-    choose the HMI's port (`hmi_port` is then None); `cwd` is where it runs.
+    choose the HMI's port (`hmi_port` is then None); `cwd` is where it runs; `scheme`
+    is the router's (`tls` with `--secure`).
     Use as a context manager: on exit the whole process tree is killed, whatever happened.
     """
 
@@ -54,6 +55,7 @@ class Up:
         *extra: str,
         name_hmi_port: bool = True,
         cwd: Path | None = None,
+        scheme: str = "tcp",
     ) -> None:
         self.port = free_port()
         self.hmi_port = free_port() if name_hmi_port else None
@@ -63,7 +65,7 @@ class Up:
             "up",
             *([str(launch)] if launch is not None else []),
             "--listen",
-            f"tcp/127.0.0.1:{self.port}",
+            f"{scheme}/127.0.0.1:{self.port}",
             "--data",
             str(self.data),
             *(["--hmi-port", str(self.hmi_port)] if self.hmi_port is not None else []),

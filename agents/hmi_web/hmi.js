@@ -1,21 +1,46 @@
-// The HMI page: render the state pushed by /events; send commands to /api/*.
+// The HMI page: render the state and history pushed by /events; send commands to /api/*;
+// ask /api/why. Plots are uPlot's (vendor/); the timeline is laid out with plain elements.
 "use strict";
 
-const cards = new Map();
+const AC = "https://w3id.org/tspace/selfconfig#";
+const TOKEN = document.querySelector('meta[name="hmi-token"]').content;
+const SPEEDS = { stopped: 0, low: 1, normal: 2, high: 3 };
+const cards = new Map(); // robot name -> {card, chart, state}
+window.__charts = new Map(); // robot name -> its uPlot chart (read by the browser test)
+const history = new Map(); // robot name -> events, oldest first
+let lastState = null;
+let redrawQueued = false;
 
 function text(value) {
-  return value === null || value === undefined ? "–" : String(value);
+  return value === null || value === undefined || value === "" ? "–" : String(value);
 }
 
-// options: strings, or {name, label} objects.
-function fillSelect(select, options) {
+function iri(name) {
+  return `<${AC}${name}>`;
+}
+
+// A triple's N-Triples terms as people read them: ac:robot1, "low".
+function short(term) {
+  if (term.startsWith(`<${AC}`)) return `ac:${term.slice(AC.length + 1, -1)}`;
+  const literal = term.match(/^"(.*)"(\^\^<[^>]*>|@[\w-]+)?$/s);
+  return literal ? `"${literal[1]}"` : term;
+}
+
+function slug(value) {
+  return text(value).toLowerCase().replace(/[^a-z0-9]+/g, "-");
+}
+
+// options: strings, or {name, label} objects. The user's choice survives updates.
+function fillSelect(select, options, preferred) {
   const pairs = options.map((o) => (typeof o === "string" ? [o, o] : [o.name, o.label]));
   const wanted = JSON.stringify(pairs);
-  if (select.dataset.options === wanted) {
-    return; // keep the user's choice while the state updates
+  if (select.dataset.options !== wanted) {
+    select.dataset.options = wanted;
+    select.replaceChildren(...pairs.map(([value, label]) => new Option(label, value)));
   }
-  select.dataset.options = wanted;
-  select.replaceChildren(...pairs.map(([value, label]) => new Option(label, value)));
+  if (preferred && !select.dataset.touched && pairs.some(([value]) => value === preferred)) {
+    select.value = preferred;
+  }
 }
 
 async function send(card, path, body) {
@@ -24,7 +49,7 @@ async function send(card, path, body) {
   try {
     const response = await fetch(path, {
       method: "POST",
-      headers: { "Content-Type": "application/json" },
+      headers: { "Content-Type": "application/json", "X-HMI-Token": TOKEN },
       body: JSON.stringify(body),
     });
     const answer = await response.json();
@@ -34,87 +59,433 @@ async function send(card, path, body) {
   }
 }
 
-function cardFor(name) {
-  let card = cards.get(name);
-  if (card) {
-    return card;
+// Why: ask /api/why for templates ([s, p, o] N-Triples, null for any) and show the trees.
+async function why(title, templates) {
+  const dialog = document.getElementById("why-dialog");
+  const body = document.getElementById("why-body");
+  document.getElementById("why-title").textContent = title;
+  body.textContent = "asking the reasoner…";
+  if (!dialog.open) dialog.showModal();
+  const query = templates.map((t) => `t=${encodeURIComponent(JSON.stringify(t))}`).join("&");
+  try {
+    const response = await fetch(`/api/why?${query}`);
+    const answer = await response.json();
+    if (!response.ok) {
+      body.textContent = `no answer: ${answer.error}`;
+    } else if (!answer.explanations.length) {
+      body.textContent = "nothing of this holds now (it changed since).";
+    } else {
+      const list = document.createElement("ul");
+      list.className = "why-tree";
+      list.append(...answer.explanations.map(whyNode));
+      body.replaceChildren(list);
+    }
+  } catch (error) {
+    body.textContent = `failed: ${error}`;
   }
-  card = document.getElementById("robot-card").content.firstElementChild.cloneNode(true);
+}
+
+function whyNode(node) {
+  const item = document.createElement("li");
+  item.className = `why-node ${node.holds}`;
+  const fact = document.createElement("code");
+  fact.textContent = node.text;
+  item.append(fact);
+  const lines = [];
+  if (node.holds === "gone") lines.push("held when the rule fired; replaced since");
+  else if (node.repeated) lines.push("(explained above)");
+  else if (node.rule) {
+    const kind = node.holds === "asserted" ? "production rule" : "rule";
+    lines.push(`by ${kind} ${node.rule}${node.where ? ` (${node.where.split("/").slice(-2).join("/")})` : ""}`);
+    if (node.comment) lines.push(`“${node.comment}”`);
+  }
+  if (node.written) {
+    const when = node.written.time ? new Date(node.written.time).toLocaleTimeString() : "";
+    const seq = node.written.seq ? ` (changeset #${node.written.seq})` : "";
+    lines.push(`written by ${node.written.agent}${when ? ` at ${when}` : ""}${seq}`);
+  }
+  for (const line of lines) {
+    const detail = document.createElement("div");
+    detail.className = line.startsWith("“") ? "why-comment" : "why-detail";
+    detail.textContent = line;
+    item.append(detail);
+  }
+  if (node.premises.length) {
+    const list = document.createElement("ul");
+    list.append(...node.premises.map(whyNode));
+    item.append(list);
+  }
+  return item;
+}
+
+function cardFor(name) {
+  let entry = cards.get(name);
+  if (entry) return entry;
+  const card = document.getElementById("robot-card").content.firstElementChild.cloneNode(true);
   card.dataset.robot = name;
+  entry = { card, chart: null, state: null };
   card.querySelector(".assign").addEventListener("submit", (event) => {
     event.preventDefault();
     const task = card.querySelector(".task-select").value;
     const request = { robot: name, task, person: card.querySelector(".person-select").value };
-    if (task === "Guiding") {
-      request.destination = card.querySelector(".place-select").value;
-    }
+    if (task === "Guiding") request.destination = card.querySelector(".place-select").value;
     send(card, "/api/task", request);
   });
   card.querySelector(".battery-form").addEventListener("submit", (event) => {
     event.preventDefault();
     send(card, "/api/battery", { robot: name, level: card.querySelector(".battery-select").value });
   });
+  for (const select of card.querySelectorAll("select")) {
+    select.addEventListener("change", () => (select.dataset.touched = "yes"));
+  }
+  card.querySelector('[data-why="task"]').addEventListener("click", () =>
+    why(`Why is ${name}'s task what it is?`, [[iri(name), iri("current_task"), null]]),
+  );
+  card.querySelector('[data-why="speed"]').addEventListener("click", () => {
+    const base = (entry.state?.devices || []).find((d) => d.kind === "MobileBase");
+    if (base) why(`Why is ${name}'s speed what it is?`, [[iri(base.name), iri("motion_speed"), null]]);
+  });
   document.getElementById("robots").append(card);
-  cards.set(name, card);
-  return card;
+  cards.set(name, entry);
+  return entry;
 }
 
 function renderRobot(robot, state) {
-  const card = cardFor(robot.name);
+  const entry = cardFor(robot.name);
+  entry.state = robot;
+  const card = entry.card;
   const battery = robot.charge === null ? text(robot.battery) : `${text(robot.battery)} (${robot.charge}%)`;
   const values = { ...robot, battery, task_type: text(robot.task_type) };
   for (const field of card.querySelectorAll("[data-field]")) {
     field.textContent = text(values[field.dataset.field]);
   }
-  card.querySelector(".devices tbody").replaceChildren(
-    ...robot.devices.map((device) => {
-      const row = document.createElement("tr");
-      row.dataset.device = device.name;
-      for (const [key, value] of [["name", device.name], ["kind", device.kind], ["mode", device.mode]]) {
-        const cell = document.createElement("td");
-        cell.dataset.field = key;
-        cell.textContent = text(value);
-        if (key === "mode") {
-          cell.className = `mode ${text(value).replace(/\s+/g, "-")}`;
-        }
-        row.append(cell);
-      }
-      return row;
-    }),
-  );
+  card.querySelector(".presence").className = `badge presence ${slug(robot.presence)}`;
+  card.querySelector(".presence").hidden = !robot.presence;
+  card.querySelector(".site").hidden = !robot.site;
+  card.querySelector(".says").hidden = !robot.announcement;
+  card.querySelector(".devices tbody").replaceChildren(...robot.devices.map((d) => deviceRow(robot, d)));
   fillSelect(card.querySelector(".task-select"), state.tasks || []);
-  fillSelect(card.querySelector(".person-select"), state.people || []);
-  fillSelect(card.querySelector(".place-select"), state.places || []);
-  fillSelect(card.querySelector(".battery-select"), state.levels || []);
+  fillSelect(card.querySelector(".person-select"), robot.people || []);
+  fillSelect(card.querySelector(".place-select"), robot.places || []);
+  fillSelect(card.querySelector(".battery-select"), state.levels || [], robot.battery);
 }
 
-function renderFirings(firings) {
-  document.getElementById("firings").replaceChildren(
-    ...firings.map((firing) => {
+function deviceRow(robot, device) {
+  const row = document.createElement("tr");
+  row.dataset.device = device.name;
+  const shown = device.name.startsWith(`${robot.name}_`) ? device.name.slice(robot.name.length + 1) : device.name;
+  const cells = [["name", shown], ["kind", device.kind], ["mode", device.mode], ["reported", device.reported]];
+  for (const [key, value] of cells) {
+    const cell = document.createElement("td");
+    cell.dataset.field = key;
+    cell.textContent = text(value);
+    if (key === "mode" || key === "reported") cell.className = `mode ${slug(value)}`;
+    if (key === "reported" && device.reported && device.mode && device.reported !== device.mode) {
+      cell.classList.add("pending");
+      cell.title = "the device has not obeyed yet";
+    }
+    row.append(cell);
+  }
+  const cell = document.createElement("td");
+  const button = document.createElement("button");
+  button.type = "button";
+  button.className = "why-link";
+  button.textContent = "why?";
+  button.addEventListener("click", () => why(`Why is ${shown} in this mode?`, [[iri(device.name), iri("running_mode"), null]]));
+  cell.append(button);
+  row.append(cell);
+  return row;
+}
+
+function windowOf(events) {
+  const now = Date.now() / 1000;
+  const range = Number(document.getElementById("range-select").value);
+  const first = events.length ? events[0].t / 1000 : now - 60;
+  const start = range ? Math.max(first, now - range) : first;
+  return [Math.min(start, now - 10), now];
+}
+
+// Battery (%) and speed as series over one x array, each value held until the next.
+function series(events, start, end) {
+  const xs = [];
+  const charge = [];
+  const speed = [];
+  let c = null;
+  let s = null;
+  for (const e of events) {
+    if (e.kind === "battery" && e.charge !== undefined) c = e.charge;
+    else if (e.kind === "speed") s = SPEEDS[e.value] ?? null;
+    else continue;
+    const t = e.t / 1000;
+    if (t < start) continue;
+    if (!xs.length && t > start) {
+      xs.push(start);
+      charge.push(null);
+      speed.push(null);
+    }
+    xs.push(t);
+    charge.push(c);
+    speed.push(s);
+  }
+  if (!xs.length) {
+    xs.push(start);
+    charge.push(c);
+    speed.push(s);
+  }
+  xs.push(end);
+  charge.push(c);
+  speed.push(s);
+  return [xs, charge, speed];
+}
+
+function firingMarks(firings) {
+  return (u) => {
+    const ctx = u.ctx;
+    ctx.save();
+    ctx.strokeStyle = "rgba(130, 60, 200, 0.55)";
+    ctx.lineWidth = Math.max(1, devicePixelRatio);
+    for (const f of firings) {
+      const x = u.valToPos(f.t / 1000, "x", true);
+      if (x < u.bbox.left || x > u.bbox.left + u.bbox.width) continue;
+      ctx.beginPath();
+      ctx.moveTo(x, u.bbox.top);
+      ctx.lineTo(x, u.bbox.top + u.bbox.height);
+      ctx.stroke();
+    }
+    ctx.restore();
+  };
+}
+
+function renderChart(entry, events, start, end, firings) {
+  const holder = entry.card.querySelector(".chart");
+  const width = Math.max(300, holder.clientWidth);
+  const data = series(events, start, end);
+  if (entry.chart && entry.chart.width !== width) {
+    entry.chart.destroy();
+    entry.chart = null;
+  }
+  entry.firings = firings;
+  if (!entry.chart) {
+    const speedNames = Object.keys(SPEEDS);
+    entry.chart = new uPlot(
+      {
+        width,
+        height: 190,
+        scales: { x: { time: true }, "%": { range: [0, 100] }, speed: { range: [-0.2, 3.2] } },
+        axes: [
+          {},
+          { scale: "%", label: "battery %", size: 50 },
+          {
+            scale: "speed",
+            side: 1,
+            label: "speed",
+            size: 60,
+            splits: () => [0, 1, 2, 3],
+            values: (u, splits) => splits.map((v) => speedNames[v] ?? ""),
+            grid: { show: false },
+          },
+        ],
+        series: [
+          {},
+          { label: "battery %", scale: "%", stroke: "#1f6feb", width: 2, fill: "rgba(31,111,235,0.08)", paths: uPlot.paths.stepped({ align: 1 }) },
+          { label: "speed", scale: "speed", stroke: "#d4760a", width: 2, paths: uPlot.paths.stepped({ align: 1 }) },
+        ],
+        hooks: { draw: [(u) => firingMarks(entry.firings)(u), () => align(entry)] },
+        legend: { live: false },
+      },
+      data,
+      holder,
+    );
+    window.__charts.set(entry.card.dataset.robot, entry.chart);
+  } else {
+    entry.chart.setData(data);
+  }
+}
+
+function lane(label, spans, start, end, kind) {
+  const row = document.createElement("div");
+  row.className = `lane ${kind}`;
+  const name = document.createElement("span");
+  name.className = "lane-name";
+  name.textContent = label;
+  const track = document.createElement("div");
+  track.className = "track";
+  for (const [from, to, value] of spans) {
+    const a = Math.max(from, start);
+    const b = Math.min(to, end);
+    if (b <= a) continue;
+    const span = document.createElement("span");
+    span.className = `span ${slug(value)}`;
+    span.style.left = `${((a - start) / (end - start)) * 100}%`;
+    span.style.width = `${((b - a) / (end - start)) * 100}%`;
+    span.textContent = value;
+    span.title = `${value} from ${new Date(from * 1000).toLocaleTimeString()}`;
+    track.append(span);
+  }
+  row.append(name, track);
+  return row;
+}
+
+// Spans of one value over time: [from, to, value], each until the next change.
+function spans(events, pick, end) {
+  const out = [];
+  for (const e of events) {
+    const value = pick(e);
+    if (value === undefined) continue;
+    if (out.length) out[out.length - 1][1] = e.t / 1000;
+    out.push([e.t / 1000, end, value]);
+  }
+  return out;
+}
+
+function renderTimeline(entry, robot, events, start, end, firings) {
+  const timeline = entry.card.querySelector(".timeline");
+  const lanes = [lane("task", spans(events, (e) => (e.kind === "task" ? e.value : undefined), end), start, end, "task")];
+  for (const device of robot.devices) {
+    if (!device.mode) continue;
+    const picked = spans(events, (e) => (e.kind === "mode" && e.device === device.name && e.commanded ? e.commanded : undefined), end);
+    if (!picked.length) continue;
+    const shown = device.name.startsWith(`${robot.name}_`) ? device.name.slice(robot.name.length + 1) : device.name;
+    lanes.push(lane(shown, picked, start, end, "mode"));
+  }
+  const marks = document.createElement("div");
+  marks.className = "lane firings-lane";
+  const name = document.createElement("span");
+  name.className = "lane-name";
+  name.textContent = "firings";
+  const track = document.createElement("div");
+  track.className = "track";
+  for (const f of firings) {
+    const t = f.t / 1000;
+    if (t < start) continue;
+    const mark = document.createElement("button");
+    mark.type = "button";
+    mark.className = "mark";
+    mark.style.left = `${((t - start) / (end - start)) * 100}%`;
+    mark.title = f.sentence;
+    mark.setAttribute("aria-label", `why: ${f.sentence}`);
+    mark.addEventListener("click", () => whyFiring(f));
+    track.append(mark);
+  }
+  marks.append(name, track);
+  lanes.push(marks);
+  timeline.replaceChildren(...lanes);
+  align(entry);
+}
+
+// Lay the timeline's tracks under the chart's plot area (known once uPlot has drawn).
+function align(entry) {
+  const over = entry.chart?.over;
+  if (!over || !over.offsetWidth) return;
+  const timeline = entry.card.querySelector(".timeline");
+  timeline.style.setProperty("--plot-left", `${over.offsetLeft}px`);
+  timeline.style.setProperty("--plot-width", `${over.offsetWidth}px`);
+}
+
+function whyFiring(firing) {
+  const templates = firing.added.filter((t) => !t[0].includes("#firing_")).slice(0, 8);
+  why(`Why: ${firing.sentence}`, templates);
+}
+
+function renderFirings(entry, firings) {
+  const list = entry.card.querySelector(".firings");
+  list.replaceChildren(
+    ...firings.slice(-12).reverse().map((f) => {
       const item = document.createElement("li");
       item.className = "firing";
-      const what = firing.added.length ? firing.added : firing.removed.map((t) => `−${t}`);
-      const cause = firing.cause_agent ? ` ← ${firing.cause_agent}: ${firing.cause.join("; ")}` : "";
-      const rules = firing.rules.length ? ` [${firing.rules.join(", ")}]` : "";
-      item.textContent = `${firing.time} ${firing.agent}${rules}: ${what.join("; ")}${cause}`;
+      const when = document.createElement("time");
+      when.textContent = new Date(f.t).toLocaleTimeString();
+      const sentence = document.createElement("span");
+      sentence.className = "sentence";
+      sentence.textContent = f.sentence;
+      const whyButton = document.createElement("button");
+      whyButton.type = "button";
+      whyButton.className = "why-link";
+      whyButton.textContent = "why?";
+      whyButton.addEventListener("click", () => whyFiring(f));
+      const raw = document.createElement("details");
+      raw.className = "raw";
+      const summary = document.createElement("summary");
+      summary.textContent = "triples";
+      const pre = document.createElement("pre");
+      const lines = [
+        `rules: ${f.rules.join(", ")}${f.cause_agent ? ` ← ${f.cause_agent}` : ""}`,
+        ...f.added.map((t) => `+ ${t.map(short).join(" ")}`),
+        ...f.removed.map((t) => `- ${t.map(short).join(" ")}`),
+      ];
+      pre.textContent = lines.join("\n");
+      raw.append(summary, pre);
+      item.append(when, " ", sentence, " ", whyButton, raw);
       return item;
     }),
   );
 }
 
+function redraw() {
+  redrawQueued = false;
+  if (!lastState) return;
+  for (const robot of lastState.robots) {
+    const entry = cardFor(robot.name);
+    if (entry.card.hidden) continue;
+    const events = history.get(robot.name) || [];
+    const [start, end] = windowOf(events);
+    const firings = events.filter((e) => e.kind === "firing");
+    renderChart(entry, events, start, end, firings);
+    renderTimeline(entry, robot, events, start, end, firings);
+    renderFirings(entry, firings);
+  }
+}
+
+// Redraw at most every REDRAW_MS: a charging battery changes the state every tick, and
+// a page that re-lays its charts on each change would keep the browser busy.
+const REDRAW_MS = 400;
+let lastRedraw = 0;
+
+function queueRedraw() {
+  if (redrawQueued) return;
+  redrawQueued = true;
+  const wait = Math.max(0, lastRedraw + REDRAW_MS - performance.now());
+  setTimeout(() => requestAnimationFrame(() => {
+    lastRedraw = performance.now();
+    redraw();
+  }), wait);
+}
+
+function addHistory(events, reset) {
+  if (reset) history.clear();
+  for (const event of events) {
+    if (event.kind === "reset" || !history.has(event.robot)) history.set(event.robot, []);
+    if (event.kind !== "reset") history.get(event.robot).push(event);
+  }
+  queueRedraw();
+}
+
+function renderSites(robots) {
+  const sites = [...new Set(robots.map((r) => r.site).filter(Boolean))].sort();
+  const filter = document.getElementById("site-filter");
+  filter.hidden = sites.length < 2;
+  const select = document.getElementById("site-select");
+  fillSelect(select, [{ name: "", label: "all sites" }, ...sites.map((s) => ({ name: s, label: s }))]);
+  for (const robot of robots) {
+    cardFor(robot.name).card.hidden = Boolean(select.value) && robot.site !== select.value;
+  }
+}
+
 function render(state) {
+  lastState = state;
   const status = document.getElementById("status");
   status.textContent = state.connected ? "live" : "waiting for the space…";
   status.className = `status ${state.connected ? "online" : "offline"}`;
   document.getElementById("space").textContent = state.space ? `— space ${state.space}` : "";
-  for (const robot of state.robots) {
-    renderRobot(robot, state);
-  }
-  renderFirings(state.firings);
+  for (const robot of state.robots) renderRobot(robot, state);
+  renderSites(state.robots);
+  queueRedraw();
 }
 
 function connect() {
   const events = new EventSource("/events");
+  events.addEventListener("history-all", (event) => addHistory(JSON.parse(event.data), true));
+  events.addEventListener("history", (event) => addHistory(JSON.parse(event.data), false));
   events.addEventListener("state", (event) => render(JSON.parse(event.data)));
   events.addEventListener("error", () => {
     const status = document.getElementById("status");
@@ -123,4 +494,9 @@ function connect() {
   });
 }
 
+document.getElementById("why-close").addEventListener("click", () => document.getElementById("why-dialog").close());
+document.getElementById("range-select").addEventListener("change", queueRedraw);
+document.getElementById("site-select").addEventListener("change", () => lastState && render(lastState));
+window.addEventListener("resize", queueRedraw);
+setInterval(queueRedraw, 5000); // time moves on: the spans that last until now grow
 connect();

@@ -1,14 +1,17 @@
-"""The HMI's web server: the page, a server-sent event stream of state, two commands.
+"""The HMI's web server: the page, a server-sent event stream of state and history, commands.
 
 Standard library only (`http.server`): one thread per connection, so a
 browser's long-lived event stream does not hold up other requests. The server
-never touches the space: it reads the latest state from a `StateBoard` and
-hands commands to the agent's thread through a `Commands` queue.
+never touches the space: it reads the latest state and history from a
+`StateBoard` and hands commands (and `why` questions) to the agent's thread
+through a `Commands` queue. State-changing requests pass `guard.Guard` first.
 
 Routes:
-    GET  /             the page (index.html, hmi.js, hmi.css beside this module)
+    GET  /             the page (index.html, hmi.js, hmi.css, vendor/ beside this module)
     GET  /api/state    the state as JSON
-    GET  /events       the state as server-sent events, one `state` event per change
+    GET  /api/history  the history events kept, as a JSON list
+    GET  /api/why?t=[s,p,o]...  why each triple (N-Triples, null for any) holds
+    GET  /events       server-sent events: `state` per change, `history` with new events
     POST /api/task     {"robot": "robot1", "task": "AttendingPatient"}: request a task
     POST /api/battery  {"robot": "robot1", "level": "very low"}: set the simulated battery
 """
@@ -18,23 +21,28 @@ from __future__ import annotations
 import json
 import queue
 import threading
-from collections.abc import Callable
+from collections import deque
+from collections.abc import Callable, Sequence
 from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass, field
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
+from urllib.parse import parse_qs, urlsplit
 
-from space.errors import SpaceError
+from agents.hmi_web.guard import Guard, Refused
+from space import SpaceError
 
 KEEPALIVE = 15.0
 COMMAND_TIMEOUT = 10.0
+HISTORY_KEPT = 20_000  # history events the board keeps for pages that (re)load
+PAGE = "index.html"
 STATIC = {
-    "/": ("index.html", "text/html; charset=utf-8"),
-    "/index.html": ("index.html", "text/html; charset=utf-8"),
     "/hmi.js": ("hmi.js", "text/javascript; charset=utf-8"),
     "/hmi.css": ("hmi.css", "text/css; charset=utf-8"),
+    "/vendor/uPlot.iife.min.js": ("vendor/uPlot.iife.min.js", "text/javascript; charset=utf-8"),
+    "/vendor/uPlot.min.css": ("vendor/uPlot.min.css", "text/css; charset=utf-8"),
 }
 
 
@@ -43,23 +51,33 @@ class CommandError(Exception):
 
 
 class StateBoard:
-    """The latest state as JSON text, and a way to wait for the next one; thread-safe."""
+    """The latest state as JSON text and the history events, and a way to wait; thread-safe."""
 
     def __init__(self) -> None:
         self._changed = threading.Condition()
         self._text = json.dumps({"connected": False, "robots": [], "firings": []})
         self._version = 0
         self._closed = False
+        self._events: deque[tuple[int, str]] = deque(maxlen=HISTORY_KEPT)
+        self._count = 0
 
-    def publish(self, state: dict) -> None:
-        """Replace the state, waking every event stream if it differs."""
+    def publish(self, state: dict, events: Sequence[dict] = ()) -> None:
+        """Replace the state and add history events; wake every event stream if anything is new."""
         text = json.dumps(state)
         with self._changed:
-            if text == self._text:
+            if text == self._text and not events:
                 return
+            for event in events:
+                self._count += 1
+                self._events.append((self._count, json.dumps({**event, "i": self._count})))
             self._text = text
             self._version += 1
             self._changed.notify_all()
+
+    def events_after(self, index: int) -> tuple[int, list[str]]:
+        """Return the index of the newest event and the events (JSON texts) after `index`."""
+        with self._changed:
+            return self._count, [text for i, text in self._events if i > index]
 
     def latest(self) -> tuple[int, str]:
         """Return the current version and state."""
@@ -136,21 +154,65 @@ class _Handler(BaseHTTPRequestHandler):
         self.server.log(format % args)
 
     def do_GET(self) -> None:
-        path = self.path.split("?", 1)[0]
-        if path in STATIC:
+        url = urlsplit(self.path)
+        path = url.path
+        try:
+            self.server.guard.check_host(self.headers.get("Host"))
+        except Refused as exc:
+            self._json(HTTPStatus.FORBIDDEN, {"error": str(exc)})
+            return
+        if path in ("/", "/index.html"):
+            self._page()
+        elif path in STATIC:
             name, kind = STATIC[path]
             body = resources.files(__package__).joinpath(name).read_bytes()
             self._send(HTTPStatus.OK, body, kind)
         elif path == "/api/state":
             self._send(HTTPStatus.OK, self.server.board.latest()[1].encode(), "application/json")
+        elif path == "/api/history":
+            events = self.server.board.events_after(0)[1]
+            self._send(HTTPStatus.OK, f"[{','.join(events)}]".encode(), "application/json")
+        elif path == "/api/why":
+            self._why(parse_qs(url.query).get("t", []))
         elif path == "/events":
             self._stream()
         else:
             self._send(HTTPStatus.NOT_FOUND, b"not found\n", "text/plain")
 
+    def _page(self) -> None:
+        """Serve the page with its session's token (a new session gets its cookie)."""
+        guard = self.server.guard
+        sid, new = guard.session(self.headers.get("Cookie"))
+        text = resources.files(__package__).joinpath(PAGE).read_text(encoding="utf-8")
+        body = text.replace("{{token}}", guard.token(sid)).encode()
+        self._send(
+            HTTPStatus.OK,
+            body,
+            "text/html; charset=utf-8",
+            {"Set-Cookie": guard.set_cookie(sid)} if new else {},
+        )
+
+    def _why(self, wanted: list[str]) -> None:
+        try:
+            triples = [json.loads(t) for t in wanted]
+            if not triples or not all(isinstance(t, list) and len(t) == 3 for t in triples):
+                raise ValueError("give t=[s, p, o] (N-Triples terms, null for any) at least once")
+            trees = self.server.commands.submit("why", {"templates": triples})
+            self._json(HTTPStatus.OK, {"explanations": trees})
+        except (ValueError, CommandError) as exc:
+            self._json(HTTPStatus.BAD_REQUEST, {"error": str(exc)})
+        except SpaceError as exc:
+            self._json(HTTPStatus.SERVICE_UNAVAILABLE, {"error": str(exc)})
+
     def do_POST(self) -> None:
         name = {"/api/task": "task", "/api/battery": "battery"}.get(self.path)
         length = int(self.headers.get("Content-Length") or 0)
+        try:
+            self.server.guard.check({k.lower(): v for k, v in self.headers.items()})
+        except Refused as exc:
+            self.server.log(f"refused {self.path}: {exc}")
+            self._json(HTTPStatus.FORBIDDEN, {"error": f"refused: {exc}"})
+            return
         try:
             params = json.loads(self.rfile.read(length) or b"{}")
             if name is None:
@@ -168,11 +230,15 @@ class _Handler(BaseHTTPRequestHandler):
     def _json(self, status: HTTPStatus, value: dict) -> None:
         self._send(status, json.dumps(value).encode(), "application/json")
 
-    def _send(self, status: HTTPStatus, body: bytes, kind: str) -> None:
+    def _send(
+        self, status: HTTPStatus, body: bytes, kind: str, extra: dict[str, str] | None = None
+    ) -> None:
         self.send_response(status)
         self.send_header("Content-Type", kind)
         self.send_header("Content-Length", str(len(body)))
         self.send_header("Cache-Control", "no-store")
+        for name, value in (extra or {}).items():
+            self.send_header(name, value)
         self.end_headers()
         self.wfile.write(body)
 
@@ -186,7 +252,10 @@ class _Handler(BaseHTTPRequestHandler):
         self.close_connection = True
         board = self.server.board
         version, text = board.latest()
+        sent, events = board.events_after(0)
         try:
+            # The whole history first: a page that reconnects starts it again.
+            self.wfile.write(f"event: history-all\ndata: [{','.join(events)}]\n\n".encode())
             self.wfile.write(f"event: state\ndata: {text}\n\n".encode())
             self.wfile.flush()
             while not board.closed:
@@ -195,6 +264,10 @@ class _Handler(BaseHTTPRequestHandler):
                     self.wfile.write(b": keep-alive\n\n")
                 else:
                     version, text = news
+                    sent, events = board.events_after(sent)
+                    if events:
+                        data = f"[{','.join(events)}]"
+                        self.wfile.write(f"event: history\ndata: {data}\n\n".encode())
                     self.wfile.write(f"event: state\ndata: {text}\n\n".encode())
                 self.wfile.flush()
         except (BrokenPipeError, ConnectionResetError):
@@ -209,6 +282,7 @@ class HmiServer(ThreadingHTTPServer):
         board: where the state to show comes from.
         commands: where the page's commands go.
         log: gets one line per request (e.g. a logger's debug).
+        guard: checks state-changing requests (a new `Guard()` by default).
     """
 
     daemon_threads = True
@@ -219,10 +293,12 @@ class HmiServer(ThreadingHTTPServer):
         board: StateBoard,
         commands: Commands,
         log: Callable[[str], None],
+        guard: Guard | None = None,
     ) -> None:
         self.board = board
         self.commands = commands
         self.log = log
+        self.guard = guard or Guard()
         super().__init__(address, _Handler)
 
     @property

@@ -11,12 +11,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rdflib import RDF, RDFS, Graph, Literal, Namespace, URIRef
+from rdflib import RDF, RDFS, Graph, Literal, URIRef
 from rdflib.term import Node
 
-AC = Namespace("https://w3id.org/tspace/selfconfig#")
-ROBOTS = Path(__file__).resolve().parents[2] / "ontology" / "robots"
-HOSPITAL_FLEET = ROBOTS / "hospital_fleet.ttl"
+from agents.resources import data_file
+from agents.vocabulary import AC
 
 
 def _local(iri: Node) -> str:
@@ -77,13 +76,14 @@ def clone_robot(graph: Graph, robot: URIRef, name: str, *, place: URIRef | None 
 def fleet_description(
     count: int,
     *,
-    template: Path = HOSPITAL_FLEET,
+    template: Path | None = None,
     robot: URIRef = AC.robot1,
     prefix: str = "robot",
 ) -> Graph:
     """Return a site with `count` copies of one robot: `ac:PREFIX1` ... `ac:PREFIXcount`.
 
-    The site, places and people of `template` are kept and its robots replaced
+    The site, places and people of `template` (default: the shipped
+    `ontology/robots/hospital_fleet.ttl`) are kept and its robots replaced
     by the copies, which start spread over the site's places (not its docks).
     Load it with `ontology/selfconfig.ttl` and `ontology/robots/common.ttl`.
 
@@ -92,7 +92,7 @@ def fleet_description(
     """
     if count < 1:
         raise ValueError(f"a fleet has at least one robot, not {count}")
-    source = Graph().parse(template)
+    source = Graph().parse(template or data_file("ontology/robots/hospital_fleet.ttl"))
     robots = set(source.subjects(RDF.type, AC.Robot))
     owned = set().union(*(robot_parts(source, r) for r in robots))
     out = Graph()

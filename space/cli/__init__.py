@@ -5,15 +5,21 @@ its parser and sets `func` to a callable taking the parsed namespace and
 returning an exit code. `ORDER` (an int) places it in `tspace --help`.
 Sub-modules import their heavy dependencies inside that callable so that
 `tspace --help` stays fast.
+
+The library's own commands are the modules of this package; an application adds
+its commands (the robot's `tspace up`, `tspace agent`) as modules of the same
+shape, named by entry points in the `tspace.commands` group.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.metadata
 import logging
 import pkgutil
 import sys
+from types import ModuleType
 
 from space.errors import SpaceError, UsageError
 
@@ -27,16 +33,34 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "-v", "--verbose", action="count", default=0, help="more log output (-vv for debug)"
     )
+    parser.add_argument("--version", action="version", version=f"tspace {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     modules = [
         importlib.import_module(f"{__name__}.{info.name}")
         for info in pkgutil.iter_modules(__path__)
         if not info.name.startswith("_")
     ]
+    modules += plugged_commands()
     commands = [m for m in modules if hasattr(m, "register")]
     for module in sorted(commands, key=lambda m: getattr(m, "ORDER", 100)):
         module.register(sub)
     return parser
+
+
+COMMANDS_GROUP = "tspace.commands"
+
+
+def _version() -> str:
+    try:
+        return importlib.metadata.version("tspace")
+    except importlib.metadata.PackageNotFoundError:
+        return "(not installed)"
+
+
+def plugged_commands() -> list[ModuleType]:
+    """Return the command modules other distributions plug in (`tspace.commands` entry points)."""
+    found = importlib.metadata.entry_points(group=COMMANDS_GROUP)
+    return [entry.load() for entry in sorted(found, key=lambda e: e.name)]
 
 
 def main(argv: list[str] | None = None) -> int:

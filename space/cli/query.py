@@ -32,7 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="all",
         help="for templates: which graph (default all)",
     )
-    add_connect(p)
+    add_connect(p, space=None)
     p.set_defaults(func=run)
 
 

@@ -16,13 +16,20 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Load the ontology and the data, run the rules to a fixpoint, apply the "
         "update, and print the state as Turtle. As in the space, a value of an "
         "owl:FunctionalProperty in the update replaces the asserted old value. "
-        "The production rules that fired are listed on stderr.",
+        "The production rules that fired, and what print() prints, go to stderr. "
+        "OWL RL runs with the rules only when an --ontology is given (and not --no-owl); "
+        "otherwise only the rules run, as Jena's GenericRuleReasoner runs them.",
     )
     p.add_argument("--rules", nargs="+", required=True, metavar="RULES", help="rules files")
     p.add_argument("--data", nargs="+", required=True, metavar="DATA", help="RDF data files")
     p.add_argument("--update", nargs="*", default=[], metavar="FILE", help="triples to assert")
     p.add_argument("--retract", nargs="*", default=[], metavar="FILE", help="triples to retract")
     p.add_argument("--ontology", nargs="*", default=[], metavar="FILE", help="OWL ontology files")
+    p.add_argument(
+        "--no-owl",
+        action="store_true",
+        help="no OWL RL even with --ontology (the ontology is still loaded as data)",
+    )
     p.add_argument(
         "--show",
         choices=("all", "asserted", "inferred"),
@@ -34,24 +41,30 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Reason and print the state on stdout (Turtle) and the firings on stderr."""
-    from rdflib import OWL, RDF, Graph
+    from rdflib import OWL, RDF, Graph, Literal, URIRef
 
+    from space.functional import replace_functional
     from space.reasoning import Origin, RuleEngine, read_graph
 
     ontology = read_graph(args.ontology)
-    engine = RuleEngine.from_files(rules=args.rules, ontology=args.ontology)
+
+    def to_stderr(text: str) -> None:
+        print(text, file=sys.stderr)
+
+    engine = RuleEngine.from_files(
+        rules=args.rules,
+        ontology=args.ontology,
+        owl=bool(args.ontology) and not args.no_owl,
+        printer=to_stderr,
+    )
     deltas = [engine.load(read_graph(args.data))]
     update, retract = read_graph(args.update), read_graph(args.retract)
     if len(update) or len(retract):
         functional = set(ontology.subjects(RDF.type, OWL.FunctionalProperty))
-        replaced = [
-            (s, p, old)
-            for s, p, o in update
-            if p in functional
-            for old in engine.graph.objects(s, p)
-            if old != o
-        ]
-        deltas.append(engine.apply(added=update, removed=[*retract, *replaced]))
+        change = replace_functional(
+            update, functional.__contains__, lambda s, p: engine.graph.objects(s, p)
+        )
+        deltas.append(engine.apply(added=change.kept, removed=[*retract, *change.replaced]))
     for delta in deltas:
         for firing in delta.firings:
             print(
@@ -63,7 +76,17 @@ def run(args: argparse.Namespace) -> int:
     out = Graph()
     for prefix, namespace in (*ontology.namespaces(), *read_graph(args.data).namespaces()):
         out.bind(prefix, namespace, override=False)
+    skipped = 0
     for triple in engine.triples(origin):
+        if isinstance(triple[0], Literal) or not isinstance(triple[1], URIRef):
+            skipped += 1  # a rule put a literal where RDF allows none: not Turtle
+            continue
         out.add(triple)
+    if skipped:
+        print(
+            f"# {skipped} derived triple{'s' if skipped > 1 else ''} with a literal subject "
+            "or predicate not printed (not RDF)",
+            file=sys.stderr,
+        )
     sys.stdout.write(out.serialize(format="turtle"))
     return 0

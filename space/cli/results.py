@@ -7,7 +7,7 @@ from typing import TextIO
 from rdflib import Graph
 from rdflib.query import Result
 
-from space.display import sparql_json, table
+from space._display import sparql_json, table
 from space.errors import InputError
 from space.prefixes import PrefixMap
 from space.template import Template

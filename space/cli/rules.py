@@ -31,9 +31,13 @@ def run_check(args: argparse.Namespace) -> int:
     failed = 0
     for path in args.files:
         try:
-            rules = load_rules([path], registry)
+            rules = load_rules([path], registry, warn=_warn)
         except RuleError as exc:
             print(exc, file=sys.stderr)
+            failed += 1
+            continue
+        if not rules:  # an empty file (or one of comments) is a mistake, not a rule base
+            print(f"{path}: no rules in it", file=sys.stderr)
             failed += 1
             continue
         print(f"{path}: {len(rules)} rule{'' if len(rules) == 1 else 's'}")
@@ -42,3 +46,7 @@ def run_check(args: argparse.Namespace) -> int:
             kind = "production" if any(not c.builtin.monotonic for c in calls) else "monotonic"
             print(f"  {rule.where}  {rule.label}  ({kind})")
     return 1 if failed else 0
+
+
+def _warn(message: str) -> None:
+    print(f"tspace rules: warning: {message}", file=sys.stderr)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from space.cli.options import add_secure, identity_of
 from space.zconfig import DEFAULT_ENDPOINT
 
 ORDER = 20
@@ -27,6 +28,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--connect", metavar="ENDPOINT", action="append", help="other routers to mesh with"
     )
     p.add_argument("--config", metavar="FILE", help="a Zenoh JSON5 configuration file")
+    add_secure(p, "store, or router with --no-store")
+    p.add_argument(
+        "--policy",
+        metavar="FILE",
+        help="with --secure: who may do what (default deploy/policy.toml, here)",
+    )
     p.add_argument(
         "--data", metavar="DIR", type=Path, help="where the store persists (default: user data dir)"
     )
@@ -69,8 +76,11 @@ def run(args: argparse.Namespace) -> int:
     """Serve until interrupted."""
     import logging
 
+    from space.errors import UsageError
     from space.serve import serve_forever
 
+    if args.policy and not args.secure:
+        raise UsageError("--policy needs --secure DIR")
     logging.getLogger("tspace").setLevel(min(logging.getLogger().level, logging.INFO))
     serve_forever(
         listen=args.listen,
@@ -82,5 +92,7 @@ def run(args: argparse.Namespace) -> int:
         config_file=args.config,
         connect=args.connect,
         store=not args.no_store,
+        identity=identity_of(args, "router" if args.no_store else "store"),
+        policy_file=args.policy,
     )
     return 0

@@ -19,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "print them as Turtle. Nothing matched: prints nothing and exits 0.",
     )
     p.add_argument("template", metavar="TEMPLATE", help="e.g. '?s ac:requested_task ?t'")
-    add_connect(p)
+    add_connect(p, space=None)
     p.set_defaults(func=run)
 
 

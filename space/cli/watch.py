@@ -20,13 +20,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "'- s p o' lines, '[inferred]' marking the inferred graph, until Ctrl-C.",
     )
     p.add_argument("template", nargs="?", metavar="TEMPLATE", help="e.g. '?s ac:battery_level ?o'")
-    add_connect(p)
+    add_connect(p, space=None)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Subscribe and print lines from the main thread (flushed, so pipes see them at once)."""
-    from space.display import triple_text
+    from space._display import triple_text
     from space.subscription import Change
 
     lines: queue.SimpleQueue[Change] = queue.SimpleQueue()

@@ -1,16 +1,17 @@
 """The reasoning engine: Jena rules and OWL RL, kept up to date incrementally."""
 
 from space.reasoning.builtins import Builtin, Registry, default_registry
-from space.reasoning.delta import Change, Delta, Firing, Origin, Why
+from space.reasoning.delta import Delta, Firing, Origin, TripleChange, Why
 from space.reasoning.engine import RuleEngine, read_graph
 from space.reasoning.errors import RuleError, RuleLoopError, RuleSyntaxError
+from space.reasoning.explain import Explainer
 from space.reasoning.parser import load_rules, parse_rules
 from space.reasoning.rules import Rule
 
 __all__ = [
     "Builtin",
-    "Change",
     "Delta",
+    "Explainer",
     "Firing",
     "Origin",
     "Registry",
@@ -19,6 +20,7 @@ __all__ = [
     "RuleError",
     "RuleLoopError",
     "RuleSyntaxError",
+    "TripleChange",
     "Why",
     "default_registry",
     "load_rules",

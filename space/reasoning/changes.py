@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from space.reasoning.delta import Change, Delta, Firing, Origin
+from space.reasoning.delta import Delta, Firing, Origin, TripleChange
 from space.reasoning.terms import TermTable
 from space.reasoning.triples import T, TripleStore
 from space.terms import Triple
@@ -12,7 +12,7 @@ JournalEntry = tuple[bool, T, tuple[int, tuple[T, ...]] | None]
 # (was present, was asserted), indexed by the two tests: no new pair per touch.
 _STATES = (((False, False), (False, True)), ((True, False), (True, True)))
 _ASSERTED, _INFERRED = Origin.ASSERTED, Origin.INFERRED
-_new_change = tuple.__new__  # Change(...) without NamedTuple's Python-level __new__
+_new_change = tuple.__new__  # TripleChange(...) without NamedTuple's Python-level __new__
 
 
 class ChangeLog:
@@ -46,8 +46,8 @@ class ChangeLog:
 
     def delta(self, firings: tuple[Firing, ...]) -> Delta:
         """Return the net change since `begin`."""
-        added: list[Change] = []
-        removed: list[Change] = []
+        added: list[TripleChange] = []
+        removed: list[TripleChange] = []
         by_rules: tuple[list[Triple], list[Triple]] = ([], [])
         inferred: tuple[list[Triple], list[Triple]] = ([], [])
         functors, triples, asserted = self._terms.functors, self._triples, self._asserted
@@ -65,7 +65,7 @@ class ChangeLog:
             triple = decode(t)
             if is_present != was_present:
                 now = is_asserted if is_present else was_asserted
-                change = _new_change(Change, (triple, _ASSERTED if now else _INFERRED))
+                change = _new_change(TripleChange, (triple, _ASSERTED if now else _INFERRED))
                 (added if is_present else removed).append(change)
             if by_rule:
                 by_rules[0 if is_asserted else 1].append(triple)

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
+from dataclasses import replace
 from typing import NoReturn
 
 from rdflib import Literal
@@ -53,23 +54,30 @@ def check_rule(rule: Rule) -> None:
             _fail(rule, item.where, f"variable {free[0]} in the head is not bound by the body")
 
 
-def check_names(rules: Iterable[Rule]) -> None:
-    """Check that no two rules of one rule set share a name: firings and `why` name rules.
+def mark_shared_names(
+    rules: Iterable[Rule], warn: Callable[[str], None] | None = None
+) -> list[Rule]:
+    """Return the rules, those whose name another one has marked so their labels say where.
 
-    Raises:
-        RuleError: at the second rule of a name, saying where the first one is.
+    Jena accepts a name used twice; firings and `why` then name each rule by name and
+    `file:line`. `warn` is told of each later use, naming the first.
     """
-    first: dict[str, Location | None] = {}
+    rules = list(rules)
+    first: dict[str, Rule] = {}
+    shared: set[str] = set()
     for rule in rules:
         if rule.name is None:
             continue
-        if rule.name not in first:
-            first[rule.name] = rule.where
-        elif first[rule.name] == rule.where and rule.where is not None:
-            again = f"{rule.where.file} is read twice (included or given again)"
-            _fail(rule, None, f"duplicate rule name: {again}")
+        if rule.name in first:
+            shared.add(rule.name)
+            if warn:
+                where, before = rule.where or "<rule>", first[rule.name].where or "<rule>"
+                warn(f"{where}: rule name '{rule.name}' is used again, first at {before}")
         else:
-            _fail(rule, None, f"duplicate rule name, first used at {first[rule.name]}")
+            first[rule.name] = rule
+    return [
+        replace(r, shared_name=True) if r.name in shared and not r.shared_name else r for r in rules
+    ]
 
 
 def _fail(rule: Rule, where: Location | None, message: str) -> NoReturn:
@@ -89,8 +97,6 @@ def _check_pattern(rule: Rule, pattern: Pattern) -> None:
     for position, term in (("subject", pattern.s), ("predicate", pattern.p)):
         if isinstance(term, Functor):
             _fail(rule, pattern.where, f"a functor may only be an object, not the {position}")
-        if isinstance(term, Literal):
-            _fail(rule, pattern.where, f"a literal may not be the {position} of a triple")
     if isinstance(pattern.o, Functor) and any(isinstance(a, Functor) for a in pattern.o.args):
         _fail(rule, pattern.where, "nested functors are not supported")
 
@@ -105,6 +111,9 @@ def _check_call(rule: Rule, call: Call, place: Place) -> None:
     if place not in builtin.places:
         where = "body" if place is Place.BODY else "head"
         _fail(rule, call.where, f"{call.name}() cannot be used in a rule's {where}")
+    problem = builtin.check(call.args)
+    if problem:
+        _fail(rule, call.where, f"{call.name}(): {problem}")
 
 
 def _check_indices(rule: Rule, call: Call) -> None:

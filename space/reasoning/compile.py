@@ -38,6 +38,7 @@ class CompiledRule:
     removes: tuple[int, ...]
     actions: tuple[tuple[Builtin, ArgsFn], ...]
     guards: tuple[tuple[Builtin, ArgsFn], ...]
+    start: Trigger | None = None  # for a body without triples: its join, run at load
 
 
 Entry = tuple[CompiledRule, Trigger]
@@ -108,6 +109,7 @@ class RuleIndex:
                 for c in rule.body
                 if isinstance(c, Call) and not c.builtin.monotonic
             ),
+            start=None if premise_of else compiler.trigger(rule, slots, None),
         )
         for index, item in enumerate(rule.body):
             if isinstance(item, Pattern):

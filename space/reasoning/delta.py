@@ -18,7 +18,7 @@ class Origin(enum.Enum):
     INFERRED = "inferred"
 
 
-class Change(NamedTuple):
+class TripleChange(NamedTuple):
     """One triple that appeared in or left the state, and its origin at that moment."""
 
     triple: Triple
@@ -89,8 +89,8 @@ class Delta:
     production rules that fired, in order.
     """
 
-    added: tuple[Change, ...] = ()
-    removed: tuple[Change, ...] = ()
+    added: tuple[TripleChange, ...] = ()
+    removed: tuple[TripleChange, ...] = ()
     asserted_added: tuple[Triple, ...] = ()
     asserted_removed: tuple[Triple, ...] = ()
     inferred_added: tuple[Triple, ...] = ()

@@ -13,17 +13,19 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 
-from rdflib import BNode, Graph, Literal, URIRef
+from rdflib import BNode, Graph, URIRef
 from rdflib.term import Node
 
+from space._turtle import read_turtle
 from space.errors import InputError
 from space.reasoning.agenda import Agenda
 from space.reasoning.builtins import Context, Registry, default_registry
 from space.reasoning.changes import ChangeLog
-from space.reasoning.checks import check_names, check_rule
+from space.reasoning.checks import check_rule, mark_shared_names
 from space.reasoning.compile import CompiledRule, RuleIndex
 from space.reasoning.delta import Delta, Firing, Origin, Why
-from space.reasoning.errors import RuleError, unreadable
+from space.reasoning.errors import RuleError, RuleLoopError, unreadable
+from space.reasoning.forms import value_patterns
 from space.reasoning.joins import JoinCompiler, Match
 from space.reasoning.owl import owl_rules
 from space.reasoning.parser import load_rules
@@ -46,7 +48,7 @@ class RuleEngine:
         printer: where the `print` builtin writes.
 
     Raises:
-        RuleError: a rule cannot be used, or two rules share a name.
+        RuleError: a rule cannot be used.
 
     Not thread-safe: one owner calls `load`, then `apply`, from one thread.
     """
@@ -62,10 +64,10 @@ class RuleEngine:
         printer: Callable[[str], None] = print,
     ) -> None:
         self.registry = registry or default_registry()
-        self.rules = tuple(rules)
+        self.rules = tuple(mark_shared_names(rules))
         for rule in self.rules:
             check_rule(rule)
-        check_names(self.rules)
+        runnable = [value_patterns(r, self.registry) for r in self.rules]
         tbox = ontology if isinstance(ontology, Graph) else _graph(ontology or ())
         self.terms = TermTable()
         self._store = TripleStore()
@@ -73,7 +75,7 @@ class RuleEngine:
         compiler = JoinCompiler(self.terms, self._store, self._ctx)
         index = RuleIndex()
         extra = owl_rules(tbox) if owl else []
-        self._compiled = [index.add(compiler, r, i) for i, r in enumerate([*self.rules, *extra])]
+        self._compiled = [index.add(compiler, r, i) for i, r in enumerate([*runnable, *extra])]
         self._index = index
         self._ontology = [self._encode(t) for t in tbox]
         self._asserted: set[T] = set()
@@ -114,9 +116,9 @@ class RuleEngine:
 
     def triples(self, origin: Origin | None = None) -> Iterator[Triple]:
         """Yield the current triples, or only the asserted or only the inferred ones."""
-        functors = self.terms.functors
+        functors, hidden = self.terms.functors, self._ctx.hidden
         for t in self._store:
-            if t[2] in functors:
+            if t[2] in functors or t[1] in hidden or t[0] in functors:
                 continue
             if origin is None or (t in self._asserted) == (origin is Origin.ASSERTED):
                 yield self._decode(t)
@@ -133,9 +135,9 @@ class RuleEngine:
         ids = [None if x is None else self.terms.find(x) for x in pattern]
         if any(i is None and x is not None for i, x in zip(ids, pattern, strict=True)):
             return  # a term the engine never saw: nothing matches
-        functors = self.terms.functors
+        functors, hidden = self.terms.functors, self._ctx.hidden
         for t in self._store.match(*ids):
-            if t[2] not in functors:
+            if t[2] not in functors and t[1] not in hidden and t[0] not in functors:
                 yield self._decode(t)
 
     def __contains__(self, triple: object) -> bool:
@@ -147,7 +149,8 @@ class RuleEngine:
 
         Raises:
             RuleError: the engine was loaded already (use `apply`).
-            RuleLoopError: production rules did not settle; nothing was loaded.
+            RuleLoopError: production rules did not settle; the state is loaded without
+                their firings (see `apply`).
         """
         if self._loaded:
             raise RuleError("load() starts a new engine; this one is loaded, use apply()")
@@ -162,7 +165,9 @@ class RuleEngine:
         Raises:
             InputError: a triple is not three rdflib terms (IRI or blank node subject,
                 IRI predicate).
-            RuleLoopError: production rules kept firing; the state is as before the call.
+            RuleLoopError: production rules kept firing. Their firings are undone; the
+                caller's triples and what the monotonic rules draw from them are kept,
+                and the error's `kept` is that net change, to publish like any delta.
         """
         plus = [self._encode(t) for t in added]
         minus = [self._encode(t) for t in removed]
@@ -174,13 +179,34 @@ class RuleEngine:
         try:
             self._unassert(minus, notify=True)
             self._assert(plus, None)
+            if not self._loaded:
+                self._start()
             self._run_agenda()
+        except RuleLoopError as loop:
+            self._undo()
+            loop.kept = self._apply_monotonic(plus, minus)
+            raise
         except Exception:
             self._undo()
             raise
         self._loaded = True
         self._graph = None
         return self._log.delta(tuple(self._firings))
+
+    def _apply_monotonic(self, plus: list[T], minus: list[T]) -> Delta:
+        """Apply a change with production rules off: after a loop, the caller's triples stay."""
+        self._log.begin(plus, minus)
+        self._firings = []
+        self._production = False
+        try:
+            self._unassert(minus, notify=True)
+            self._assert(plus, None)
+        finally:
+            self._production = True
+            self._agenda.reset()
+        self._loaded = True
+        self._graph = None
+        return self._log.delta(())
 
     def why(self, triple: Triple) -> Why | None:
         """Return why a triple holds: asserted, or a rule and its premises; None if it does not."""
@@ -232,6 +258,31 @@ class RuleEngine:
                 self._asserted_by[t] = by
             if add(t):
                 queue.append(t)
+        if queue:
+            self._propagate(queue)
+
+    def _start(self) -> None:
+        """Fire the rules whose body has no triple (axioms, builtins only) once, at load."""
+        out: list[Match] = []
+        queue: list[T] = []
+        for compiled in self._compiled:
+            if compiled.start is None:
+                continue
+            compiled.start(0, 0, 0, out)
+            for match in out:
+                if compiled.production:
+                    self._agenda.push(compiled, match)
+                    continue
+                premises, bindings = match
+                for head in compiled.heads(bindings):
+                    self._support.record(head, compiled.order, premises)
+                    if head not in self._store.triples:
+                        self._log.touch(head)
+                        self._store.add(head)
+                        queue.append(head)
+                for builtin, args in compiled.actions:
+                    builtin.act(self._ctx, args(bindings))
+            out.clear()
         if queue:
             self._propagate(queue)
 
@@ -352,6 +403,15 @@ def read_graph(paths: Iterable[str | Path]) -> Graph:
     """
     graph = Graph()
     for path in paths:
+        if _format(Path(path)) == "turtle":
+            # One-line errors with file and line (binary, not UTF-8, ill-typed literals too).
+            try:
+                graph += read_turtle(str(path), base=Path(path).resolve().as_uri())
+            except InputError as exc:
+                if isinstance(exc.__cause__, OSError):  # said as every unreadable file is
+                    raise InputError(unreadable(path, exc.__cause__)) from exc.__cause__
+                raise
+            continue
         try:
             # Opened here, not by rdflib, which names a missing relative path by a wrong
             # absolute one; the base for relative IRIs stays the file's own IRI.
@@ -380,6 +440,12 @@ def _format(path: Path) -> str:
 def _graph(triples: Iterable[Triple]) -> Graph:
     graph = Graph()
     for triple in triples:
-        if not isinstance(triple[2], FunctorValue) and not isinstance(triple[0], Literal):
+        s, p, o = triple
+        # A rule may put a literal or a functor where RDF allows none: not in a Graph.
+        if (
+            isinstance(s, URIRef | BNode)
+            and isinstance(p, URIRef)
+            and not isinstance(o, FunctorValue)
+        ):
             graph.add(triple)
     return graph

@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from space.errors import SpaceError, clause
+
+if TYPE_CHECKING:
+    from space.reasoning.delta import Delta
 
 
 class RuleError(SpaceError):
@@ -17,15 +22,18 @@ class RuleSyntaxError(RuleError):
 
 
 class RuleLoopError(RuleError):
-    """Production rules kept firing past the engine's limit; the update was undone.
+    """Production rules kept firing past the engine's limit; their firings were undone.
 
     Attributes:
         rules: the names of the rules that fired most in the runaway cycle, most first.
+        kept: what the update changed without the production rules (a `Delta`), set by
+            `RuleEngine.apply`: the caller's triples and their monotonic conclusions.
     """
 
     def __init__(self, message: str, rules: tuple[str, ...]) -> None:
         super().__init__(message)
         self.rules = rules
+        self.kept: Delta | None = None
 
 
 def unreadable(path: object, exc: OSError) -> str:

@@ -74,11 +74,12 @@ class JoinCompiler:
         }
         self.count = 0
 
-    def trigger(self, rule: Rule, slots: dict[Var, int], seed: int) -> Trigger:
+    def trigger(self, rule: Rule, slots: dict[Var, int], seed: int | None) -> Trigger:
         """Return the join that starts from a triple matching body item `seed`.
 
         The seed is a pattern (the triple was added) or a `noValue` call (the
-        triple was removed, so the call may now accept).
+        triple was removed, so the call may now accept). With no seed, the join
+        starts from nothing (an axiom, a body of builtins only) and ignores the triple.
         """
         gen = _Body(self, rule, slots)
         return self._define(f"_trigger{self.count}", "s_, p_, o_, out", gen.trigger(seed))
@@ -167,15 +168,17 @@ class _Body:
             for v in variables(t)
         }
 
-    def trigger(self, seed: int) -> list[str]:
-        item = self.rule.body[seed]
+    def trigger(self, seed: int | None) -> list[str]:
+        item = None if seed is None else self.rule.body[seed]
         patterns = {i: x for i, x in enumerate(self.rule.body) if isinstance(x, Pattern)}
         calls = {
             i: x
             for i, x in enumerate(self.rule.body)
             if isinstance(x, Call) and x.builtin.effect is Effect.NONE
         }
-        if isinstance(item, Pattern):
+        if item is None:
+            pass
+        elif isinstance(item, Pattern):
             self._seed(item.terms, seed)
             del patterns[seed]
         else:

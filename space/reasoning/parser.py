@@ -1,37 +1,55 @@
-"""Parse Jena rules files into `Rule`s, with `file:line:column` in every error.
+"""Parse Jena rules files into `Rule`s as Jena 4.5's `Rule.Parser` reads them, errors located.
 
-Prefixes rdf, rdfs, owl and xsd are known; `@prefix` adds more from where it is
-written; `@include <path>` reads another file relative to the including one,
-which starts with the includer's prefixes.
+The grammar is Jena's (read from its source, not guessed): a rule is
+`[name: body -> head]` or, unbracketed, `name: body -> head .` (the name is
+optional, `<-` writes a backward rule head first, an empty body is an axiom);
+a clause is a triple `(s p o)`, a builtin `name(args)` or a nested rule `[...]`;
+a node is `?var`, `<iri>`, `prefix:local`, a quoted string with an optional
+`^^datatype`, a number (`42` is an xsd:int, `4.2` an xsd:float, as Jena types
+them), `_label` (a blank node), `name(args)` (a functor) or any other word (an
+IRI, as Jena takes `foo` or `http://x#y`). `@prefix` lines apply to the whole
+file; Jena's own prefixes (rdf, rdfs, owl, xsd, rb, jr, eg, drdfs) are known.
+Included files come first, as in Jena. Beyond Jena: `'x'@en` written without a
+gap is a language-tagged string, and an included file also sees the includer's
+prefixes and is found relative to it.
 """
 
 from __future__ import annotations
 
+import logging
 import re
-from collections.abc import Iterable, Iterator
-from dataclasses import dataclass
-from decimal import Decimal
-from functools import cache
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
-from lark import Lark, Token, Tree
-from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
-from rdflib import OWL, RDF, RDFS, XSD, Literal, URIRef
+from rdflib import BNode, Literal, URIRef
 
 from space.reasoning.builtins import Registry
-from space.reasoning.checks import check_names, check_rule, located
+from space.reasoning.checks import check_rule, located, mark_shared_names
 from space.reasoning.errors import RuleError, RuleSyntaxError, unreadable
+from space.reasoning.forms import blank_head_variables, flatten
+from space.reasoning.listmaps import expand_list_maps
 from space.reasoning.rules import Call, Functor, Item, Location, Pattern, Rule, Term, Var
+from space.reasoning.rulesets import is_builtin_ruleset, read_builtin_ruleset
+from space.reasoning.tokens import Directive, Kind, Token, lex
+from space.reasoning.values import number
 
-DEFAULT_PREFIXES = {"rdf": str(RDF), "rdfs": str(RDFS), "owl": str(OWL), "xsd": str(XSD)}
-_ESCAPE = re.compile(r"\\(u[0-9A-Fa-f]{4}|U[0-9A-Fa-f]{8}|.)")
-_SIMPLE = {"t": "\t", "n": "\n", "r": "\r", "b": "\b", "f": "\f"}
-
-
-@cache
-def _grammar() -> Lark:
-    text = (Path(__file__).parent / "jena.lark").read_text()
-    return Lark(text, parser="lalr", propagate_positions=True)
+RDF_NS = "http://www.w3.org/1999/02/22-rdf-syntax-ns#"
+RDFS_NS = "http://www.w3.org/2000/01/rdf-schema#"
+DEFAULT_PREFIXES = {
+    "rdf": RDF_NS,
+    "rdfs": RDFS_NS,
+    "drdfs": "urn:x-hp-direct-predicate:http_//www.w3.org/2000/01/rdf-schema#",
+    "owl": "http://www.w3.org/2002/07/owl#",
+    "jr": "http://jena.hpl.hp.com/2003/JenaReasoner#",
+    "rb": "urn:x-hp-jena:rubrik/",
+    "eg": "urn:x-hp:eg/",
+    "xsd": "http://www.w3.org/2001/XMLSchema#",
+}
+log = logging.getLogger(__name__)
+# A word with one of these before its colon is a full IRI when no prefix of that name is known.
+_SCHEMES = ("http", "https", "urn", "file", "ftp", "mailto")
+_DATATYPE_SCHEMES = ("http", "urn", "ftp", "mailto")
+_LANGUAGE = re.compile(r"@[A-Za-z]{1,8}(-[A-Za-z0-9]{1,8})*")
 
 
 def parse_rules(
@@ -40,38 +58,48 @@ def parse_rules(
     *,
     source: str = "<string>",
     prefixes: dict[str, str] | None = None,
+    warn: Callable[[str], None] | None = None,
 ) -> list[Rule]:
     """Parse the text of a rules file; `@include` paths resolve against `source`'s folder.
+
+    A rule name used twice is accepted, as Jena does, with a warning naming both places
+    (given to `warn`, by default logged).
 
     Raises:
         RuleSyntaxError: the text is not valid Jena rule syntax, or an include is missing.
         RuleError: a rule uses an unknown builtin, a wrong arity, a bad drop/remove index
-            or a head variable the body does not bind; two rules (includes counted) share
-            a name.
+            or a builtin input nothing binds.
     """
-    rules = list(_Reader(registry, ()).read(text, source, dict(prefixes or DEFAULT_PREFIXES)))
-    check_names(rules)
-    return rules
+    warn = warn or log.warning
+    rules = _Reader(registry, (), warn).read(text, source, dict(prefixes or DEFAULT_PREFIXES))
+    return mark_shared_names(rules, warn)
 
 
-def load_rules(paths: Iterable[str | Path], registry: Registry) -> list[Rule]:
-    """Parse rules files in order, their includes in place.
+def load_rules(
+    paths: Iterable[str | Path],
+    registry: Registry,
+    warn: Callable[[str], None] | None = None,
+) -> list[Rule]:
+    """Parse rules files in order, each file's includes first; warnings as `parse_rules`.
 
     Raises:
         RuleSyntaxError, RuleError: as `parse_rules`; a missing file is a RuleSyntaxError.
     """
-    reader = _Reader(registry, ())
+    warn = warn or log.warning
+    reader = _Reader(registry, (), warn)
     rules = [rule for path in paths for rule in reader.read_file(Path(path), DEFAULT_PREFIXES)]
-    check_names(rules)
-    return rules
+    return mark_shared_names(rules, warn)
 
 
 class _Reader:
-    """Turn parse trees into rules, following includes (and refusing include cycles)."""
+    """Turn files into rules, following includes (and refusing include cycles)."""
 
-    def __init__(self, registry: Registry, including: tuple[Path, ...]) -> None:
+    def __init__(
+        self, registry: Registry, including: tuple[Path, ...], warn: Callable[[str], None]
+    ) -> None:
         self.registry = registry
         self.including = including
+        self.warn = warn
 
     def read_file(
         self, path: Path, prefixes: dict[str, str], where: Location | None = None
@@ -88,178 +116,231 @@ class _Reader:
             ) from exc
         except UnicodeDecodeError as exc:
             raise RuleSyntaxError(located(where, None, f"{path}: not UTF-8 text")) from exc
-        inner = _Reader(self.registry, (*self.including, resolved))
+        inner = _Reader(self.registry, (*self.including, resolved), self.warn)
         yield from inner.read(text, str(path), dict(prefixes))
 
     def read(self, text: str, source: str, prefixes: dict[str, str]) -> Iterator[Rule]:
-        try:
-            tree = _grammar().parse(text)
-        except UnexpectedInput as exc:
-            raise RuleSyntaxError(_syntax_message(exc, text, source)) from None
-        for statement in tree.children:
-            assert isinstance(statement, Tree)
-            where = Location(source, statement.meta.line, statement.meta.column)
-            if statement.data == "prefix":
-                name, iri = statement.children
-                prefixes[str(name)[:-1]] = str(iri)[1:-1]
-            elif statement.data == "include":
-                target = Path(str(statement.children[0])[1:-1])
-                if not target.is_absolute():
-                    target = Path(source).parent / target
-                yield from self.read_file(target, prefixes, where)
+        lexed = lex(text, source)
+        includes = []
+        for directive in lexed.directives:
+            ignored = _ignored(directive.rest)
+            if ignored:
+                self.warn(
+                    f"{directive.where}: text after {directive.keyword}'s <...> is ignored, as "
+                    f"Jena ignores it: {ignored[:40]!r} (write it on a line of its own)"
+                )
+            if directive.keyword == "@prefix":
+                name, iri = _prefix(directive)
+                prefixes[name] = iri
             else:
-                yield _RuleBuilder(self.registry, prefixes, source).rule(statement, where)
+                includes.append(directive)
+        for directive in includes:
+            yield from self.include(directive, source, prefixes)
+        parser = _Parser(lexed.tokens, lexed.end, self.registry, prefixes)
+        while not parser.done():
+            for nested in flatten(parser.rule()):
+                for rule in expand_list_maps(nested, self.registry):
+                    rule = blank_head_variables(rule, self.registry)
+                    check_rule(rule)
+                    yield rule
+
+    def include(
+        self, directive: Directive, source: str, prefixes: dict[str, str]
+    ) -> Iterator[Rule]:
+        target = _uri_argument(directive.rest, directive)
+        if is_builtin_ruleset(target):
+            text, name = read_builtin_ruleset(target, directive.where)
+            yield from self.read(text, name, dict(DEFAULT_PREFIXES))
+            return
+        if target.startswith("file:"):
+            target = target[5:].removeprefix("//")
+        path = Path(target)
+        if not path.is_absolute():
+            path = Path(source).parent / path
+        yield from self.read_file(path, prefixes, directive.where)
 
 
-class _RuleBuilder:
-    """Build one rule from its parse tree, resolving prefixes and builtins."""
+def _prefix(directive: Directive) -> tuple[str, str]:
+    """Read `@prefix name: <iri>` as Jena does: a word, then the IRI (the colon optional)."""
+    words = directive.rest.split(None, 1)
+    if len(words) < 2:
+        raise RuleSyntaxError(located(directive.where, None, "@prefix needs a name and an IRI"))
+    name = words[0].removesuffix(":")
+    return name, _uri_argument(words[1], directive)
 
-    def __init__(self, registry: Registry, prefixes: dict[str, str], source: str) -> None:
+
+def _ignored(rest: str) -> str:
+    """Return what follows a directive's `<...>` other than a dot: Jena drops it unread."""
+    close = rest.find(">")
+    return rest[close + 1 :].strip().removeprefix(".").strip() if close >= 0 else ""
+
+
+def _uri_argument(rest: str, directive: Directive) -> str:
+    """Return `<...>`'s content, or the trimmed rest of the line when it has no `<`."""
+    token = rest.strip()
+    if token.startswith("<"):
+        close = token.find(">")
+        if close < 0:
+            message = f"{directive.keyword}: '<' without '>'"
+            raise RuleSyntaxError(located(directive.where, None, message))
+        return token[1:close]
+    if not token:
+        raise RuleSyntaxError(located(directive.where, None, f"{directive.keyword} needs an IRI"))
+    return token
+
+
+class _Parser:
+    """Read rules from tokens, one token of lookahead, as Jena's `Rule.Parser` does."""
+
+    def __init__(
+        self, tokens: list[Token], end: Location, registry: Registry, prefixes: dict[str, str]
+    ) -> None:
+        self.tokens = tokens
+        self.position = 0
+        self.end = end
         self.registry = registry
         self.prefixes = prefixes
-        self.source = source
         self.name: str | None = None
+        self.opened: list[tuple[Token, str | None, bool]] = []  # token, rule name, is a rule
 
-    def rule(self, tree: Tree, where: Location) -> Rule:
-        name_token, body_tree, arrow, head_tree = tree.children
-        self.name = str(name_token)[:-1] if name_token is not None else None
-        if str(arrow) == "<-":
-            raise RuleError(located(where, self.name, "backward rules (<-) are not supported"))
-        body = self.items(body_tree)
-        head = self.items(head_tree)
-        rule = Rule(self.name, tuple(body), tuple(head), where)
-        check_rule(rule)
-        return rule
+    def done(self) -> bool:
+        return self.position >= len(self.tokens)
 
-    def here(self, node: Tree | Token) -> Location:
-        if isinstance(node, Token):
-            return Location(self.source, node.line or 0, node.column or 0)
-        return Location(self.source, node.meta.line, node.meta.column)
+    def peek(self) -> Token:
+        if self.done():
+            raise RuleSyntaxError(self._at_end())
+        return self.tokens[self.position]
 
-    def fail(self, node: Tree | Token, message: str) -> RuleError:
-        return RuleError(located(self.here(node), self.name, message))
+    def next(self) -> Token:
+        token = self.peek()
+        self.position += 1
+        if token.kind is Kind.UNCLOSED:
+            raise self.fail(token, f"syntax error: string not closed ({token.text})")
+        return token
 
-    def items(self, tree: Tree) -> list[Item]:
-        items: list[Item] = []
-        for child in tree.children:
-            assert isinstance(child, Tree)
-            if child.data == "triple":
-                s, p, o = (self.term(c) for c in child.children)
-                items.append(Pattern(s, p, o, self.here(child)))
-            elif child.data == "call":
-                name, *args = child.children
-                builtin = self.registry.get(str(name))
-                if builtin is None:
-                    raise self.fail(child, f"unknown builtin '{name}'")
-                terms = tuple(self.term(a) for a in args if a is not None)
-                items.append(Call(builtin, terms, self.here(child)))
-            else:
-                raise self.fail(child, "nested (backward) rules are not supported")
-        return items
+    def fail(self, token: Token, message: str) -> RuleSyntaxError:
+        return RuleSyntaxError(located(token.where, self.name, message))
 
-    def term(self, node: Tree | Token) -> Term:
-        if isinstance(node, Token):
-            raise self.fail(node, f"unexpected {node}")
-        first = node.children[0] if node.children else None
-        kind = node.data
-        if kind == "var":
-            return Var(str(first)[1:])
-        if kind == "iri":
-            return URIRef(str(first)[1:-1])
-        if kind == "pname":
-            return self.expand(first)  # type: ignore[arg-type]
-        if kind == "number":
-            return _number(str(first))
-        if kind == "literal":
-            return self.literal(node)
-        name, *args = node.children
-        return Functor(str(name), tuple(self.term(a) for a in args if a is not None))
+    def rule(self, opening: Token | None = None) -> Rule:
+        """Read one rule: `[name: ...]`, `name: ... .`, or, nested, what follows its `[`."""
+        start = opening or self.peek()
+        if opening is None and _is(start, Kind.SYNTAX, "["):
+            self.next()
+        name = None
+        token = self.peek()
+        if token.kind is Kind.WORD and token.text.endswith(":") and len(token.text) > 1:
+            name = token.text[:-1]
+            self.next()
+        outer = self.name
+        self.name = name or outer
+        self.opened.append((start, name, True))
+        body: list[Item | Rule] = []
+        while not _is(self.peek(), Kind.WORD, "->", "<-"):
+            body.append(self.clause())
+        backward = self.next().text == "<-"
+        head: list[Item | Rule] = []
+        while not (_is(self.peek(), Kind.WORD, ".") or _is(self.peek(), Kind.SYNTAX, "]")):
+            head.append(self.clause())
+        self.next()
+        self.opened.pop()
+        self.name = outer
+        where = start.where
+        if backward:
+            return Rule(name, tuple(head), tuple(body), where, backward=True)  # type: ignore[arg-type]
+        return Rule(name, tuple(body), tuple(head), where)  # type: ignore[arg-type]
 
-    def expand(self, token: Token) -> URIRef:
-        prefix, _, local = str(token).partition(":")
-        if prefix not in self.prefixes:
-            raise self.fail(token, f"unknown prefix '{prefix}:'")
-        return URIRef(self.prefixes[prefix] + local)
+    def clause(self) -> Item | Rule:
+        token = self.peek()
+        if _is(token, Kind.SYNTAX, "("):
+            nodes = self.node_list()
+            if len(nodes) != 3:
+                raise self.fail(token, f"a triple has 3 nodes, this one has {len(nodes)}")
+            s, p, o = nodes
+            return Pattern(s, p, o, token.where)
+        if _is(token, Kind.SYNTAX, "["):
+            return self.rule(self.next())
+        if token.kind is not Kind.WORD or token.text in ("->", "<-", "."):
+            raise self.fail(token, f"syntax error: unexpected {token}")
+        self.next()
+        builtin = self.registry.get(token.text)
+        if builtin is None:
+            raise RuleError(located(token.where, self.name, f"unknown builtin '{token.text}'"))
+        return Call(builtin, tuple(self.node_list()), token.where)
 
-    def literal(self, node: Tree) -> Literal:
-        text, suffix = node.children
-        value = _unescape(str(text)[1:-1])
-        if suffix is None:
-            return Literal(value)
-        if str(suffix).startswith("@"):
-            return Literal(value, lang=str(suffix)[1:])
-        if str(suffix).startswith("<"):
-            return Literal(value, datatype=URIRef(str(suffix)[1:-1]))
-        return Literal(value, datatype=self.expand(suffix))  # type: ignore[arg-type]
+    def node_list(self) -> list[Term]:
+        opening = self.next()
+        if not _is(opening, Kind.SYNTAX, "("):
+            raise self.fail(opening, f"syntax error: expected '(', found {opening}")
+        self.opened.append((opening, None, False))
+        nodes = []
+        while (token := self.next()).kind is not Kind.SYNTAX:
+            nodes.append(self.node(token))
+        if token.text != ")":
+            raise self.fail(token, f"syntax error: unexpected {token!s}, expected ')'")
+        self.opened.pop()
+        return nodes
 
+    def node(self, token: Token) -> Term:
+        text = token.text
+        if token.kind is Kind.STRING:
+            return self.literal(token)
+        if text in ("->", "<-"):
+            raise self.fail(token, f"syntax error: unexpected '{text}' (a '(' is not closed)")
+        if text.startswith("?"):
+            return Var(text[1:])
+        if text in ("*", "_"):
+            raise self.fail(token, "wildcard variables are not supported (as in Jena)")
+        if text.startswith("<") and text.endswith(">"):
+            return URIRef(text[1:-1])
+        if text.startswith("_"):
+            return BNode(text[1:])
+        if ":" in text:
+            return URIRef(self.expand(token, text, _SCHEMES))
+        if text[0].isdigit() or (text[0] == "-" and len(text) > 1 and text[1].isdigit()):
+            return number(text)
+        if not self.done() and _is(self.peek(), Kind.SYNTAX, "("):
+            return Functor(text, tuple(self.node_list()))
+        return URIRef(text)
 
-def _number(text: str) -> Literal:
-    """Type a bare number as Turtle does: integer, decimal or double."""
-    if "e" in text.lower():
-        return Literal(float(text))
-    if "." in text:
-        return Literal(Decimal(text))
-    return Literal(int(text))
+    def literal(self, token: Token) -> Literal:
+        if self.done():
+            return Literal(token.text)
+        after = self.peek()
+        if after.kind is Kind.WORD and after.text.startswith("^^"):
+            self.next()
+            datatype = after.text[2:]
+            if ":" in datatype:
+                datatype = self.expand(after, datatype, _DATATYPE_SCHEMES)
+            return Literal(token.text, datatype=URIRef(datatype))
+        if after.kind is Kind.WORD and after.glued and _LANGUAGE.fullmatch(after.text):
+            self.next()
+            return Literal(token.text, lang=after.text[1:])
+        return Literal(token.text)
 
+    def expand(self, token: Token, text: str, schemes: tuple[str, ...]) -> str:
+        prefix, _, local = text.partition(":")
+        if prefix in self.prefixes:
+            return self.prefixes[prefix] + local
+        if prefix in schemes:
+            return text
+        raise RuleError(located(token.where, self.name, f"unknown prefix '{prefix}:'"))
 
-def _unescape(text: str) -> str:
-    def one(match: re.Match[str]) -> str:
-        code = match.group(1)
-        if code[0] in "uU" and len(code) > 1:
-            return chr(int(code[1:], 16))
-        return _SIMPLE.get(code, code)
-
-    return _ESCAPE.sub(one, text) if "\\" in text else text
-
-
-def _syntax_message(exc: UnexpectedInput, text: str, source: str) -> str:
-    """Say where parsing stopped, what was there, and in which rule."""
-    opened = _open_brackets(text)
-    rules = [o for o in opened if o.bracket == "["]
-    name = rules[-1].name if rules else None
-    if isinstance(exc, UnexpectedToken) and exc.token.type == "$END":
-        # LALR reports the end as a token placed on the last real one: say where the text ends.
-        where = Location(source, text.count("\n") + 1, len(text) - text.rfind("\n"))
+    def _at_end(self) -> str:
         message = "syntax error: unexpected end of file"
-        if opened and opened[-1].bracket == "[":
+        for opening, name, is_rule in reversed(self.opened):
+            if is_rule and opening.text == "[":
+                rule = f"rule '{name}'" if name else "the rule"
+                message += f": expected ']' to close {rule} opened at line {opening.where.line}"
+                return located(self.end, None, message)
+            if not is_rule:
+                message += f": expected ')' to close the '(' opened at line {opening.where.line}"
+                return located(self.end, self.name, message)
+        if self.opened:
+            opening, name, _ = self.opened[-1]
             rule = f"rule '{name}'" if name else "the rule"
-            message += f": expected ']' to close {rule} opened at line {opened[-1].line}"
-            return located(where, None, message)
-        if opened:
-            message += f": expected ')' to close the '(' opened at line {opened[-1].line}"
-        return located(where, name, message)
-    if isinstance(exc, UnexpectedToken):
-        found = repr(str(exc.token))
-    elif isinstance(exc, UnexpectedCharacters):
-        found = repr(text[exc.pos_in_stream]) if exc.pos_in_stream is not None else "input"
-    else:
-        found = "input"
-    where = Location(source, exc.line, exc.column)
-    return located(where, name, f"syntax error: unexpected {found}")
+            message += f": expected '.' to end {rule} started at line {opening.where.line}"
+        return located(self.end, None, message)
 
 
-@dataclass
-class _Opened:
-    """A `[` or `(` not closed yet, and the name of the rule a `[` starts."""
-
-    bracket: str
-    line: int
-    name: str | None = None
-
-
-def _open_brackets(text: str) -> list[_Opened]:
-    """Return the brackets still open where parsing stops, outermost first."""
-    opened: list[_Opened] = []
-    parser = _grammar().parse_interactive(text)
-    try:
-        for token in parser.lexer_thread.lex(parser.parser_state):
-            parser.feed_token(token)  # first, so that the token that fails does not count
-            if token.type in ("LSQB", "LPAR"):
-                opened.append(_Opened(str(token), token.line or 0))
-            elif token.type in ("RSQB", "RPAR") and opened:
-                opened.pop()
-            elif token.type == "RULENAME" and opened:
-                opened[-1].name = str(token)[:-1]
-    except UnexpectedInput:
-        pass  # the error being explained: `opened` is the state just before it
-    return opened
+def _is(token: Token, kind: Kind, *texts: str) -> bool:
+    return token.kind is kind and token.text in texts

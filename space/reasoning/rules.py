@@ -92,17 +92,25 @@ Item = Pattern | Call
 
 @dataclass(frozen=True)
 class Rule:
-    """A forward rule `[name: body -> head]`; body items are indexed from 0, calls included."""
+    """A forward rule `[name: body -> head]`; body items are indexed from 0, calls included.
+
+    `backward` marks a rule written `[head <- body]`, which this engine runs forward;
+    `shared_name` one whose name another rule of its set has (Jena allows it).
+    """
 
     name: str | None
     body: tuple[Item, ...]
     head: tuple[Item, ...]
     where: Location | None = None
+    backward: bool = False
+    shared_name: bool = False
 
     @property
     def label(self) -> str:
-        """Return the name, or where an unnamed rule was written."""
+        """Return the name (with `file:line` when another rule has it too), or where it is."""
         if self.name:
+            if self.shared_name and self.where:
+                return f"{self.name} ({self.where.file}:{self.where.line})"
             return self.name
         return f"<rule at {self.where}>" if self.where else "<unnamed rule>"
 

@@ -29,6 +29,7 @@ from space.errors import MalformedPayload, QueryError, SpaceError
 from space.store import intake, queries
 from space.store.acks import AckGate
 from space.store.db import StoreDB
+from space.store.guard import WriteGuard, writer_of
 from space.store.publish import Publisher
 from space.store.readers import Readers
 from space.store.replica import Replica
@@ -62,8 +63,10 @@ class StoreServer:
         query_timeout: float = 10.0,
         query_slots: int = 16,
         max_spaces: int = 10_000,
+        guard: WriteGuard | None = None,
     ) -> None:
         self.session = session
+        self.guard = guard
         self.log_keep = log_keep
         self.data_dir = data_dir
         self.durable = durable
@@ -108,6 +111,7 @@ class StoreServer:
             acks=self._acks,
             publisher=self._publisher,
             max_spaces=self.max_spaces,
+            guard=self.guard,
         )
         replica = Replica(self.session, self.root, self._db, self._space, self._forget)
         for name in self._db.spaces():
@@ -145,14 +149,16 @@ class StoreServer:
             key = str(query.key_expr)
             space = key.split("/")[1]
             payload = query.payload.to_bytes() if query.payload is not None else None
-            self._queue.put(Request(kind, space, payload, query, key))
+            self._queue.put(Request(kind, space, payload, query, key, writer_of(key)))
 
         return callback
 
     def _on_sample(self, kind: str) -> Callable[[zenoh.Sample], None]:
         def callback(sample: zenoh.Sample) -> None:
-            space = str(sample.key_expr).split("/")[1]
-            self._queue.put(Request(kind, space, sample.payload.to_bytes()))
+            key = str(sample.key_expr)
+            space = key.split("/")[1]
+            payload = sample.payload.to_bytes()
+            self._queue.put(Request(kind, space, payload, key=key, writer=writer_of(key)))
 
         return callback
 
@@ -317,6 +323,10 @@ class StoreServer:
             s.declare_queryable(f"{root}/*/@/write", on_query("write")),
             s.declare_subscriber(f"{root}/*/@/write", self._on_sample("write")),
             s.declare_queryable(f"{root}/*/@/query", on_query("query")),
+            # The same services, under the name of the writer (see space.store.guard).
+            s.declare_queryable(f"{root}/*/@/write/*", on_query("write")),
+            s.declare_subscriber(f"{root}/*/@/write/*", self._on_sample("write")),
+            s.declare_queryable(f"{root}/*/@/query/*", on_query("query")),
             s.declare_queryable(f"{root}/*/@/log", on_query("log")),
             s.declare_queryable(f"{root}/*/{keys.ASSERTED}/**", on_query("keys")),
             s.declare_queryable(f"{root}/*/{keys.INFERRED}/**", on_query("keys")),

@@ -191,6 +191,10 @@ class SpaceState:
                 found.append(o)
         return found
 
+    def holds(self, t: OxTriple) -> bool:
+        """Return whether the asserted graph holds a triple, counting the batch's writes so far."""
+        return self._has("t", t)
+
     def _has(self, which: str, t: OxTriple) -> bool:
         held = self._overlay.get((which, t))
         return held if held is not None else self.db.has(self.name, which, t)

@@ -23,6 +23,7 @@ from space.errors import QueryError, SpaceError
 from space.store import intake
 from space.store.acks import AckGate
 from space.store.db import CommitFailed, StoreDB
+from space.store.guard import Refused, WriteGuard
 from space.store.publish import Publisher
 from space.store.state import Net, SpaceState
 
@@ -42,6 +43,7 @@ class Request:
     payload: bytes | None
     query: zenoh.Query | None = None
     key: str = ""
+    writer: str | None = None  # the CN a secure router let write on this key
 
 
 @dataclass
@@ -60,6 +62,9 @@ class Writer:
     Args:
         spaces: the server's loaded spaces, name -> state (read to check the limit).
         space: returns a space's state, loading or creating it.
+        guard: in a secure space, what each identity may write; a write or take
+            it forbids is refused (and logged, naming the identity) before anything
+            is decided.
     """
 
     def __init__(
@@ -72,8 +77,10 @@ class Writer:
         acks: AckGate,
         publisher: Publisher,
         max_spaces: int,
+        guard: WriteGuard | None = None,
     ) -> None:
         self.session = session
+        self.guard = guard
         self.db = db
         self.failed = db.open_error  # why writes are refused ("": they are not)
         self.max_spaces = max_spaces
@@ -111,6 +118,7 @@ class Writer:
                 again["dropped"] = unpack(done[2])
             answer(req, again)
             return
+        self._check(req, write)
         net, dropped = state.decide(write, write.ts or str(self.session.new_timestamp()))
         if net is not None and dropped:
             net.entry.dropped = pack(dropped)  # a retry is told the same
@@ -147,6 +155,8 @@ class Writer:
                 return
         found = list(self.db.match(state.name, "t", take.template))
         write = intake.WriteRequest(id=take.id or uuid.uuid4().hex, agent=take.agent, removed=found)
+        if found:
+            self._check(req, write, take=True)
         net, _ = state.decide(write, take.ts or str(self.session.new_timestamp()))
 
         def reply(net: Net | None) -> dict:
@@ -155,6 +165,19 @@ class Writer:
             return {"seq": net.entry.seq, keys.ASSERTED: net.texts[1]}
 
         pending.append(Pending(req, state, net, reply))
+
+    def _check(self, req: Request, write: intake.WriteRequest, *, take: bool = False) -> None:
+        """Refuse what the policy forbids its writer (no-op outside a secure space).
+
+        Raises:
+            Refused: naming the identity and the first triple it may not write.
+        """
+        if self.guard is None:
+            return
+        state = self._spaces[req.space]
+        why = self.guard.refusal(req.writer, write, state.holds, state.prefixes.compact, take=take)
+        if why:
+            raise Refused(why)
 
     def commit(self, pending: list[Pending]) -> None:
         """Commit a batch's changesets at once; then answer and publish, or fail every one."""

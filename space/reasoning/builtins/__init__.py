@@ -2,7 +2,17 @@
 
 from __future__ import annotations
 
-from space.reasoning.builtins import actions, arithmetic, compare, kinds, nodes, strings
+from space.reasoning.builtins import (
+    actions,
+    arithmetic,
+    compare,
+    kinds,
+    listmap,
+    lists,
+    nodes,
+    strings,
+    tabling,
+)
 from space.reasoning.builtins.base import Args, Builtin, Context, Effect, Place, Registry
 
 __all__ = ["Args", "Builtin", "Context", "Effect", "Place", "Registry", "default_registry"]
@@ -18,5 +28,8 @@ def default_registry() -> Registry:
             *kinds.BUILTINS,
             *nodes.BUILTINS,
             *actions.BUILTINS,
+            *lists.BUILTINS,
+            *tabling.BUILTINS,
+            *listmap.BUILTINS,
         )
     )

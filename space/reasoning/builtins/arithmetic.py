@@ -3,7 +3,8 @@
 Each binds its last argument to the result, or checks it when already bound.
 Integers stay integers, as in Jena: `quotient` of two integers truncates toward
 zero (`quotient(7, 2)` is 3, `quotient(-7, 2)` is -3); anything else is computed
-as a float.
+as a float. Results are typed as Jena types them: an xsd:int (an xsd:long past
+2^31-1) or an xsd:double.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from collections.abc import Callable
 from decimal import Decimal
 from typing import ClassVar
 
-from rdflib import Literal
+from rdflib import XSD, Literal
 
 from space.reasoning.builtins.base import Args, Builtin, Context
 
@@ -31,9 +32,16 @@ def _bind(ctx: Context, args: Args, result: Number) -> Args | None:
     """Bind the last argument to `result`, or check it when it is already bound."""
     out = args[-1]
     if out is None:
-        return (*args[:-1], ctx.terms.id(Literal(result)))
+        return (*args[:-1], ctx.terms.id(_literal(result)))
     value = _number(ctx, out)
     return args if value is not None and value == result else None
+
+
+def _literal(result: Number) -> Literal:
+    """Type a result as Jena does: an integer is an xsd:int (xsd:long past 2^31-1)."""
+    if isinstance(result, int):
+        return Literal(str(result), datatype=XSD.int if result < 2**31 else XSD.long)
+    return Literal(result)
 
 
 class _Binary(Builtin):
@@ -41,6 +49,7 @@ class _Binary(Builtin):
 
     arity = (3, 3)
     function: ClassVar[Callable[[Number, Number], Number]]
+    picks: ClassVar[bool] = False
 
     def outputs(self, nargs: int) -> frozenset[int]:
         return frozenset({2})
@@ -49,7 +58,13 @@ class _Binary(Builtin):
         a, b = _number(ctx, args[0]), _number(ctx, args[1])
         if a is None or b is None:
             return None
-        return _bind(ctx, args, type(self).function(a, b))
+        result = type(self).function(a, b)
+        if self.picks:  # min and max give one of their arguments, as it was written
+            chosen = args[0] if result == a else args[1]
+            if args[2] is None:
+                return (args[0], args[1], chosen)
+            return args if ctx.terms.same_value(args[2], chosen) else None  # type: ignore[arg-type]
+        return _bind(ctx, args, result)
 
 
 class Sum(_Binary):
@@ -78,6 +93,7 @@ class Min(_Binary):
 
     name = "min"
     function = min
+    picks = True
 
 
 class Max(_Binary):
@@ -85,6 +101,7 @@ class Max(_Binary):
 
     name = "max"
     function = max
+    picks = True
 
 
 def _divide(a: Number, b: Number) -> Number:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, ClassVar
 
 from rdflib import BNode
@@ -38,6 +38,7 @@ class Context:
     terms: TermTable
     store: TripleStore
     printer: Callable[[str], None] = print
+    hidden: set[int] = field(default_factory=set)  # predicates `hide` keeps out of listings
 
     def fresh_bnode(self) -> int:
         """Return the id of a new blank node."""
@@ -64,6 +65,10 @@ class Builtin:
     def outputs(self, nargs: int) -> frozenset[int]:
         """Return the argument positions this builtin binds when they are unbound."""
         return frozenset()
+
+    def check(self, args: tuple[object, ...]) -> str | None:
+        """Return why the call's constant arguments cannot work (checked on load), or None."""
+        return None
 
     def accepts(self, nargs: int) -> bool:
         """Tell whether a call with `nargs` arguments is well formed."""

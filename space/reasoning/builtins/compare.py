@@ -8,6 +8,7 @@ from datetime import date, datetime, time
 from decimal import Decimal
 from typing import ClassVar
 
+from space.reasoning.builtins import temporal
 from space.reasoning.builtins.base import Args, Builtin, Context
 
 _ORDERED = (int, float, Decimal, datetime, date, time)
@@ -36,7 +37,12 @@ class NotEqual(Builtin):
 
 
 class _Ordering(Builtin):
-    """Accept when two numbers, or two date-times, are in the given order."""
+    """Accept when two numbers, or two dates or date-times, are in the given order.
+
+    Dates and date-times are ordered as XSD orders them (`temporal`): a date is its
+    midnight, and a value without a timezone is unordered against one with a timezone
+    less than 14 hours away.
+    """
 
     arity = (2, 2)
     compare: ClassVar[Callable[[object, object], bool]]
@@ -45,6 +51,9 @@ class _Ordering(Builtin):
         a, b = (ctx.terms.keys[i] for i in args)  # type: ignore[index]
         if not (isinstance(a, _ORDERED) and isinstance(b, _ORDERED)) or isinstance(a, bool):
             return None
+        if isinstance(a, date) and isinstance(b, date):  # datetime is a date too
+            order = temporal.compare(a, b)
+            return args if order is not None and type(self).compare(order, 0) else None
         try:
             return args if type(self).compare(a, b) else None
         except TypeError:  # a number against a time, or naive against aware times

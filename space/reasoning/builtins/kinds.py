@@ -1,11 +1,11 @@
 """Test what kind of term a value is: `isLiteral notLiteral isBNode notBNode isDType notDType
-bound unbound`."""
+isFunctor notFunctor bound unbound`, and count a subject's literal values."""
 
 from __future__ import annotations
 
 from typing import ClassVar
 
-from rdflib import XSD, BNode, Literal, URIRef
+from rdflib import RDFS, XSD, BNode, Literal, URIRef
 
 from space.reasoning.builtins.base import Args, Builtin, Context
 
@@ -55,6 +55,8 @@ class NotBNode(_Kind):
 def _has_datatype(literal: object, datatype: object) -> bool:
     if not isinstance(literal, Literal) or not isinstance(datatype, URIRef):
         return False
+    if datatype == RDFS.Literal:  # every literal is an rdfs:Literal, as in Jena
+        return True
     if literal.datatype is None:
         return datatype in (XSD.string, URIRef(str(XSD.string))) and literal.language is None
     return literal.datatype == datatype and literal.ill_typed is not True
@@ -80,6 +82,53 @@ class NotDType(Builtin):
     def run(self, ctx: Context, args: Args) -> Args | None:
         literal, datatype = (ctx.terms.term(i) for i in args)  # type: ignore[arg-type]
         return None if _has_datatype(literal, datatype) else args
+
+
+class IsFunctor(Builtin):
+    """Accept a functor value (`f(a, b)` made by a rule head)."""
+
+    name = "isFunctor"
+    arity = (1, 1)
+
+    def run(self, ctx: Context, args: Args) -> Args | None:
+        return args if args[0] in ctx.terms.functors else None
+
+
+class NotFunctor(Builtin):
+    """Accept anything but a functor value."""
+
+    name = "notFunctor"
+    arity = (1, 1)
+
+    def run(self, ctx: Context, args: Args) -> Args | None:
+        return None if args[0] in ctx.terms.functors else args
+
+
+class CountLiteralValues(Builtin):
+    """Bind the third argument to how many distinct literal values `(s p ?)` has (xsd:int).
+
+    Not monotonic: the count changes as triples come, so a rule using it fires as a
+    production rule, once per new match.
+    """
+
+    name = "countLiteralValues"
+    arity = (3, 3)
+    monotonic = False
+
+    def outputs(self, nargs: int) -> frozenset[int]:
+        return frozenset({2})
+
+    def run(self, ctx: Context, args: Args) -> Args | None:
+        s, p, count = args
+        values = {
+            ctx.terms.keys[o]
+            for _, _, o in ctx.store.match(s, p, None)
+            if isinstance(ctx.terms.term(o), Literal)
+        }
+        found = ctx.terms.id(Literal(str(len(values)), datatype=XSD.int))
+        if count is None:
+            return (s, p, found)
+        return args if ctx.terms.same_value(count, found) else None
 
 
 class Bound(Builtin):
@@ -111,6 +160,9 @@ BUILTINS: tuple[Builtin, ...] = (
     NotBNode(),
     IsDType(),
     NotDType(),
+    IsFunctor(),
+    NotFunctor(),
+    CountLiteralValues(),
     Bound(),
     Unbound(),
 )

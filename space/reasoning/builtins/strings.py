@@ -10,6 +10,7 @@ from rdflib import Literal, URIRef
 from rdflib.term import Node
 
 from space.reasoning.builtins.base import Args, Builtin, Context
+from space.reasoning.builtins.javaregex import JavaRegexError, translate
 
 
 def _lexical(ctx: Context, i: int | None) -> str | None:
@@ -57,9 +58,9 @@ class UriConcat(_Concat):
 @lru_cache(maxsize=256)
 def _compiled(pattern: str) -> re.Pattern[str] | None:
     try:
-        return re.compile(pattern)
-    except re.error:
-        return None
+        return translate(pattern)
+    except JavaRegexError:
+        return None  # a pattern only known when the rule fires; a constant one is checked on load
 
 
 class Regex(Builtin):
@@ -70,6 +71,15 @@ class Regex(Builtin):
 
     def outputs(self, nargs: int) -> frozenset[int]:
         return frozenset(range(2, nargs))
+
+    def check(self, args: tuple[object, ...]) -> str | None:
+        pattern = args[1] if len(args) > 1 else None
+        if isinstance(pattern, Literal):
+            try:
+                translate(str(pattern))
+            except JavaRegexError as exc:
+                return str(exc)
+        return None
 
     def run(self, ctx: Context, args: Args) -> Args | None:
         text, pattern = _lexical(ctx, args[0]), _lexical(ctx, args[1])

@@ -1,0 +1,30 @@
+"""The robot vocabulary (`ac:`, docs/vocabulary.md) in one place, and how robots are named.
+
+Every agent, the runtime and the simulators take the namespace from here, so a
+renamed namespace or a new firing-record property is one edit.
+"""
+
+from __future__ import annotations
+
+from rdflib import Namespace, URIRef
+
+from space import PrefixMap
+
+AC = Namespace("https://w3id.org/tspace/selfconfig#")
+PREFIXES = PrefixMap({"ac": str(AC)})
+
+# Subjects of the reasoner's firing records (`ac:firing_N`, `ac:firing_ROBOT_N`).
+RECORD_PREFIX = str(AC) + "firing_"
+FIRING_PROPERTIES = frozenset({AC.rule_name, AC.cause, AC.fired_at, AC.firing_seq, AC.robot})
+
+
+def robot_iri(text: str) -> URIRef:
+    """Return the IRI of a robot given as an IRI, `ac:name` or a bare local name."""
+    if "://" in text or text.startswith("urn:"):
+        return URIRef(text)
+    return AC[text.removeprefix("ac:")]
+
+
+def local_name(iri: URIRef) -> str:
+    """Return the part of an IRI after its last `#` or `/`."""
+    return str(iri).rsplit("#", 1)[-1].rsplit("/", 1)[-1]

@@ -1,0 +1,97 @@
+"""Count how much of Jena's own rule material a tspace checkout parses and answers as Jena.
+
+    python bench/jena_counts.py [SPACE_ROOT]
+
+SPACE_ROOT (default: this checkout) is the folder holding the `space` package, so an
+older commit (`git archive <commit> | tar -x -C /tmp/before`) can be measured with
+today's recorded answers in tests/data/jena (written by bench/jena_referee.py).
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+import logging
+import re
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parents[1]
+JENA = HERE / "tests" / "data" / "jena"
+DATA = {
+    "rdfs-tbox1-data1": ("rdfs-tbox1.rdf", "rdfs-data1.rdf"),
+    "rdfs-tbox1-data3": ("rdfs-tbox1.rdf", "rdfs-data3.rdf"),
+    "owl-tbox-consistent": ("owl-tbox.owl", "owl-consistentData.rdf"),
+}
+_LINE = re.compile(r"^(<[^>]*>|_:\S+)\s+(<[^>]*>)\s+(.*\S)\s*\.$")
+
+
+def main(root: Path) -> None:
+    sys.path.insert(0, str(root))
+    logging.disable(logging.CRITICAL)
+    from rdflib import Graph
+    from rdflib.compare import isomorphic
+    from rdflib.util import from_n3
+
+    from space.reasoning import RuleEngine, default_registry, load_rules, parse_rules, read_graph
+
+    registry = default_registry()
+    quiet = {"warn": lambda m: None} if "warn" in inspect.signature(load_rules).parameters else {}
+
+    def parses(text: str) -> bool:
+        try:
+            parse_rules(text, registry, **quiet)
+        except Exception:  # an old checkout may fail any way: not parsed
+            return False
+        return True
+
+    def closure(rules: Path, data: list[Path]) -> Graph | None:
+        try:
+            engine = RuleEngine(load_rules([rules], registry, **quiet), owl=False)
+            engine.load(read_graph(data))
+        except Exception:  # as above: no answer
+            return None
+        return engine.graph
+
+    def ntriples(text: str) -> Graph:
+        graph = Graph()
+        for line in text.splitlines():
+            s, p, o = _LINE.match(line).groups()  # type: ignore[union-attr]
+            graph.add((from_n3(s), from_n3(p), from_n3(o)))  # type: ignore[arg-type]
+        return graph
+
+    texts = json.loads((JENA / "rule_texts.json").read_text())
+    accepted = [t for t in texts if t["jena"].startswith("ok")]
+    print(
+        f"rule texts in Jena's tests that Jena parses: {sum(parses(t['text']) for t in accepted)}"
+        f"/{len(accepted)} parsed"
+    )
+    files = sorted((JENA / "etc").glob("*.rules"))
+    print(f"bundled rule files: {sum(parses(f.read_text()) for f in files)}/{len(files)} parsed")
+    same = total = 0
+    answering = set()
+    for expected in sorted((JENA / "expected").glob("*.nt")):
+        answer = expected.read_text()
+        if answer.startswith(("error", "timeout")):
+            continue
+        rules, data = expected.stem.split("@")
+        total += 1
+        ours = closure(JENA / "etc" / f"{rules}.rules", [JENA / "data" / f for f in DATA[data]])
+        if ours is not None and isomorphic(ours, ntriples(answer)):
+            same += 1
+            answering.add(rules)
+    print(
+        f"bundled rule files on Jena's test data: {same}/{total} closures as Jena's "
+        f"({len(answering)} files: {', '.join(sorted(answering))})"
+    )
+    cases = sorted((JENA / "cases").glob("*.json"))
+    passed = 0
+    for case in cases:
+        ours = closure(case.with_suffix(".rules"), [case.with_suffix(".data.nt")])
+        expected = ntriples(case.with_suffix(".expected.nt").read_text())
+        passed += ours is not None and isomorphic(ours, expected)
+    print(f"transcribed Jena test cases: {passed}/{len(cases)} answer as Jena")
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]).resolve() if len(sys.argv) > 1 else HERE)
