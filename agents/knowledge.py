@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import logging
 import os
 import time
+import warnings
 from pathlib import Path
 
 from agents.resources import data_file
-from space.reasoning import RuleEngine
+from space.reasoning import RuleEngine, UnsupportedAxiom
 
+log = logging.getLogger("tspace.reasoner")
 RELOAD_PERIOD = 1.0  # seconds between looks at the rules files
 
 
@@ -33,7 +36,15 @@ class Knowledge:
             RuleError: a rules file is invalid (the message has its line and column).
         """
         self._mtimes = self._stat()
-        return RuleEngine.from_files(rules=self.rules, ontology=self.ontology)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", UnsupportedAxiom)
+            engine = RuleEngine.from_files(rules=self.rules, ontology=self.ontology)
+        for w in caught:
+            if issubclass(w.category, UnsupportedAxiom):
+                log.warning("ontology: %s", w.message)
+            else:
+                warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+        return engine
 
     def changed(self) -> bool:
         """Return True if a rules file changed since `build` (looked at once a second)."""

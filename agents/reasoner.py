@@ -30,6 +30,7 @@ from rdflib.term import Node
 
 from agents.answers import Ledger, present_truth
 from agents.base import Agent, run_agent
+from agents.conflicts import ConflictRecords
 from agents.firings import FIRING_PREFIX, FiringLog, is_record
 from agents.knowledge import Knowledge
 from agents.ownership import PREFIX, Roster, concerned_robot
@@ -81,6 +82,7 @@ class Reasoner(Agent):
             prefix += f"{local_name(self.robot)}_"
         self.engine: RuleEngine | None = None
         self.firings = FiringLog(args.keep_firings, prefix)
+        self.conflicts = ConflictRecords()
         self.roster = Roster(self.name) if args.per_robot else None
         self._others: zenoh.Subscriber | None = None
         self._joined: zenoh.LivelinessToken | None = None
@@ -291,8 +293,14 @@ class Reasoner(Agent):
         """
         assert self.ts is not None and self.engine is not None
         inferred_added, inferred_removed = list(delta.inferred_added), list(delta.inferred_removed)
-        if inferred_before is not None:
-            now = set(self.engine.triples(Origin.INFERRED))
+        new_conflicts, gone_conflicts, conflicts = self.conflicts.update(self.engine.conflicts())
+        for conflict in conflicts:
+            self.log.warning("conflict (cause %s): %s", cause, conflict)
+        if inferred_before is None:
+            inferred_added += new_conflicts
+            inferred_removed += gone_conflicts
+        else:
+            now = set(self.engine.triples(Origin.INFERRED)) | self.conflicts.triples()
             inferred_added, inferred_removed = (
                 list(now - inferred_before),
                 list(inferred_before - now),
@@ -388,7 +396,7 @@ class Reasoner(Agent):
         assert self.engine is not None
         try:
             engine = self.knowledge.build()
-            inferred_before = set(self.engine.triples(Origin.INFERRED))
+            inferred_before = set(self.engine.triples(Origin.INFERRED)) | self.conflicts.triples()
             delta = engine.load(sorted(self.engine.triples(Origin.ASSERTED), key=triple_to_nt))
         except RuleError as exc:
             self.log.error("rules not reloaded, the previous rules stay in force: %s", exc)

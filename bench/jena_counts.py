@@ -15,6 +15,7 @@ import logging
 import re
 import sys
 from pathlib import Path
+from typing import Any
 
 HERE = Path(__file__).resolve().parents[1]
 JENA = HERE / "tests" / "data" / "jena"
@@ -31,9 +32,9 @@ def main(root: Path) -> None:
     logging.disable(logging.CRITICAL)
     from rdflib import Graph
     from rdflib.compare import isomorphic
-    from rdflib.util import from_n3
+    from rdflib.util import from_n3, guess_format
 
-    from space.reasoning import RuleEngine, default_registry, load_rules, parse_rules, read_graph
+    from space.reasoning import RuleEngine, default_registry, load_rules, parse_rules
 
     registry = default_registry()
     quiet = {"warn": lambda m: None} if "warn" in inspect.signature(load_rules).parameters else {}
@@ -45,13 +46,40 @@ def main(root: Path) -> None:
             return False
         return True
 
+    def engine(rules: Path) -> Any:
+        loaded = load_rules([rules], registry, **quiet)
+        try:  # two layers for a hybrid rule set, where this checkout has them
+            from space.reasoning.hybrid import HybridEngine, mixes_forms
+        except ImportError:
+            return RuleEngine(loaded, owl=False)
+        return (HybridEngine if mixes_forms(loaded) else RuleEngine)(loaded, owl=False)
+
     def closure(rules: Path, data: list[Path]) -> Graph | None:
         try:
-            engine = RuleEngine(load_rules([rules], registry, **quiet), owl=False)
-            engine.load(read_graph(data))
+            run = engine(rules)
+            graph = Graph()
+            for path in data:  # the referee's fixed base, as tests/test_jena_conformance.py
+                kind = guess_format(str(path)) or "turtle"
+                graph.parse(path, format=kind, publicID="http://jena.test/data/" + path.name)
+            run.load(graph)
         except Exception:  # as above: no answer
             return None
-        return engine.graph
+        return run.graph
+
+    def states(rules: Path, steps: list[str]) -> list[Graph] | None:
+        try:
+            run = engine(rules)
+            run.load(Graph())
+            found = []
+            for step in steps:
+                if step == "=":
+                    found.append(Graph() + run.graph)
+                    continue
+                triple = next(iter(ntriples(step[2:])))
+                run.apply(**{"added" if step[0] == "+" else "removed": [triple]})
+        except Exception:  # as above: no answer
+            return None
+        return found
 
     def ntriples(text: str) -> Graph:
         graph = Graph()
@@ -87,9 +115,17 @@ def main(root: Path) -> None:
     cases = sorted((JENA / "cases").glob("*.json"))
     passed = 0
     for case in cases:
+        answer = case.with_suffix(".expected.nt").read_text()
+        spec = json.loads(case.read_text())
+        if "steps" in spec:
+            jena = [ntriples(p) for p in re.split(r"^# state \d+\n", answer, flags=re.M)[1:]]
+            got = states(case.with_suffix(".rules"), spec["steps"])
+            passed += got is not None and len(got) == len(jena) and all(
+                isomorphic(a, b) for a, b in zip(got, jena, strict=True)
+            )
+            continue
         ours = closure(case.with_suffix(".rules"), [case.with_suffix(".data.nt")])
-        expected = ntriples(case.with_suffix(".expected.nt").read_text())
-        passed += ours is not None and isomorphic(ours, expected)
+        passed += ours is not None and isomorphic(ours, ntriples(answer))
     print(f"transcribed Jena test cases: {passed}/{len(cases)} answer as Jena")
 
 

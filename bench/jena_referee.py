@@ -114,7 +114,8 @@ def _unescape(text: str) -> str:
     return re.sub(r"\\(u[0-9a-fA-F]{4}|.)", one, text)
 
 
-def main(git: Path) -> None:
+def bundled_jobs(git: Path) -> list[list[str]]:
+    """Copy Jena's bundled rule sets and test data; return the jobs that run them."""
     for folder in ("etc", "data", "expected", "texts"):
         (OUT / folder).mkdir(parents=True, exist_ok=True)
     with zipfile.ZipFile(JAVA / "jena-core.jar") as jar:
@@ -131,6 +132,13 @@ def main(git: Path) -> None:
             data = ",".join(str(OUT / "data" / f.replace("/", "-")) for f in files)
             out = OUT / "expected" / f"{rules.stem}@{name}.nt"
             jobs.append(["run", "hybrid", str(rules), str(out), data])
+    return jobs
+
+
+def main(git: Path | None, cases_only: bool = False) -> None:
+    if git is None and not cases_only:
+        raise SystemExit("--jena-git is needed (only --cases-only runs without it)")
+    jobs = [] if cases_only else bundled_jobs(git)  # type: ignore[arg-type]
     for case in sorted((OUT / "cases").glob("*.json")):
         spec = json.loads(case.read_text())
         rules = case.with_suffix(".rules")
@@ -138,7 +146,18 @@ def main(git: Path) -> None:
         data = case.with_suffix(".data.nt")
         data.write_text(spec.get("data", ""))
         out = case.with_suffix(".expected.nt")
-        jobs.append(["run", spec.get("mode", "forwardRETE"), str(rules), str(out), str(data)])
+        mode = spec.get("mode", "forwardRETE")
+        if "steps" in spec:
+            steps = case.with_suffix(".steps")
+            steps.write_text("".join(line + "\n" for line in spec["steps"]))
+            jobs.append(["steps", mode, str(rules), str(out), str(steps)])
+        else:
+            jobs.append(["run", mode, str(rules), str(out), str(data)])
+    if cases_only:
+        with tempfile.TemporaryDirectory() as work:
+            referee(jobs, Path(work))
+        print(f"recorded {len(jobs)} Jena answers into {OUT / 'cases'}")
+        return
     texts = rule_texts(git)
     for old in (OUT / "texts").glob("*.rules"):
         old.unlink()
@@ -160,5 +179,9 @@ def main(git: Path) -> None:
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--jena-git", type=Path, required=True, help="apache/jena's .git")
-    main(parser.parse_args().jena_git)
+    parser.add_argument("--jena-git", type=Path, help="apache/jena's .git")
+    parser.add_argument(
+        "--cases-only", action="store_true", help="rerun only the transcribed cases"
+    )
+    args = parser.parse_args()
+    main(args.jena_git, args.cases_only)

@@ -8,12 +8,12 @@ liveliness token, and send writes and requests on the keys that carry its own
 name, `<root>/<space>/@/write/<CN>` and `<root>/<space>/@/query/<CN>`. So a
 store knows who wrote what (the router let only that CN use that key), and
 nobody but a server can publish a change notification, declare a queryable or
-answer a query. A robot host's own router (`router.ROBOT`) may pass on what
-that robot's agents and reasoner may send, so a robot host taken over still
-cannot speak for another robot. Revoked identities are denied everything.
-The access control
-applies on the router that holds it, to the links of its clients: clients
-must connect to such a router, never peer with each other.
+answer a query (but a reasoner, for its `@/why`). A robot host's own router
+(`router.ROBOT`) may pass on what that robot's agents and reasoner may send, so
+a robot host taken over still cannot speak for another robot. Revoked
+identities are denied everything. The access control applies on the router
+that holds it, to the links of its clients: clients must connect to such a
+router, never peer with each other.
 """
 
 from __future__ import annotations
@@ -69,6 +69,7 @@ def _reads(root: str) -> list[dict]:
                 f"{space}/i/**",
                 f"{space}/@/query",
                 f"{space}/@/log",
+                f"{space}/@/why",
             ],
         ),
         _rule(
@@ -104,6 +105,8 @@ def access_control(policy: Policy, root: str = keys.ROOT) -> dict:
         },
         *_reads(root),
         _rule("reasoner-roster", ["liveliness_token"], [f"{root}/*/@reasoners/*"]),
+        # A reasoner explains its conclusions (`tspace why`): its one queryable.
+        _rule("reasoner-why", ["declare_queryable", "reply"], [f"{root}/*/@/why"]),
     ]
     subjects: list[dict] = []
     policies: list[dict] = []
@@ -130,7 +133,7 @@ def access_control(policy: Policy, root: str = keys.ROOT) -> dict:
             )
         )
         rules.append(_rule(f"token-{index}", ["liveliness_token"], [f"{root}/*/@agents/{name}"]))
-        extra = ["reasoner-roster"] if policy.roles[name] is Role.REASONER else []
+        extra = ["reasoner-roster", "reasoner-why"] if policy.roles[name] is Role.REASONER else []
         crews[name] = [own, f"token-{index}", *extra]
         grant(f"member-{index}", [name], [*reads, *crews[name]])
     # A robot host's router passes on what its robot's own processes may send, nothing else.

@@ -62,6 +62,27 @@ class InputError(SpaceError, ValueError):
     """A document or name given by the user (Turtle file, template, space name) is malformed."""
 
 
+class NoQuorum(SpaceUnavailable):
+    """Too few etcd members are reachable to commit anything: this side of a cut is a minority."""
+
+    def __init__(self, reachable: int, members: int, detail: str = "") -> None:
+        self.reachable, self.members = reachable, members
+        more = f" ({detail})" if detail else ""
+        super().__init__(f"no quorum: {reachable} of {members} members reachable{more}")
+
+
+class ClusterError(SpaceError):
+    """etcd refused a request for a reason retrying cannot fix (quota full, bad request)."""
+
+
+class WriteConflict(SpaceError):
+    """A compare-and-swap failed: what the decision read changed before it committed."""
+
+    def __init__(self, keys: list[bytes]) -> None:
+        self.keys = keys
+        super().__init__(f"{len(keys)} key(s) changed since they were read")
+
+
 class UsageError(SpaceError):
     """A command line asks for something its options cannot mean (exit 2, as argparse's)."""
 

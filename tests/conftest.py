@@ -166,3 +166,38 @@ def launch(server: Server, space_name: str, tmp_path: Path) -> Iterator[Launcher
         yield launcher
     finally:
         launcher.close()
+
+
+@pytest.fixture
+def etcd_cluster(tmp_path: Path) -> Iterator[object]:
+    """Three real etcd members on loopback ports, writable when the test starts; killed after."""
+    import asyncio
+
+    from space.store.etcd_member import LocalCluster, etcd_missing
+
+    if etcd_missing():
+        pytest.skip(etcd_missing())
+    with LocalCluster(tmp_path / "etcd") as cluster:
+        asyncio.run(_until_writable(cluster.endpoints))
+        yield cluster
+
+
+async def _until_writable(endpoints: list[str], timeout: float = 20.0) -> None:
+    from aetcd import rpc
+
+    from space.errors import NoQuorum
+    from space.store.etcd_client import EtcdClient
+
+    client = EtcdClient(endpoints)
+    await client.open()
+    deadline = time.monotonic() + timeout
+    try:
+        while True:
+            try:
+                await client.range(rpc.RangeRequest(key=b"probe"))
+                return
+            except NoQuorum:
+                if time.monotonic() > deadline:
+                    raise
+    finally:
+        await client.close()

@@ -92,7 +92,7 @@ class Browser:
             port_file = profile / "DevToolsActivePort"
             wait_for(lambda: port_file.is_file() and port_file.read_text().strip(), 30, "Chromium")
             port = int(port_file.read_text().split()[0])
-            page = wait_for(lambda: self._page(port), 10, "Chromium's page")
+            page = wait_for(lambda: self._page(port), 30, "Chromium's page")
             self.ws = websocket.create_connection(page, timeout=10, suppress_origin=True)
         except BaseException:
             self.close()  # a browser that never answered is still a process group to end
@@ -100,8 +100,12 @@ class Browser:
 
     @staticmethod
     def _page(port: int) -> str | None:
-        with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=2) as reply:
-            targets = json.load(reply)
+        try:
+            with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=2) as reply:
+                targets = json.load(reply)
+        except OSError:
+            return None  # Chromium still starting (slow on a loaded machine): asked again
+
         return next((t["webSocketDebuggerUrl"] for t in targets if t["type"] == "page"), None)
 
     def close(self) -> None:

@@ -14,6 +14,7 @@ import json
 import signal
 import urllib.request
 
+import pytest
 from test_scenario_battery import HOSPITAL, STEPS, completed_steps, needs_reasoner
 from uprun import Up, alive
 
@@ -25,6 +26,7 @@ def gone(up: Up) -> bool:
 
 
 @needs_reasoner
+@pytest.mark.timeout(900)  # eleven runs of tspace up: minutes on a busy machine
 def test_the_scenario_reruns_after_an_interrupt_at_every_step(tmp_path):
     for step in range(1, len(STEPS) + 1):
         with Up(tmp_path, HOSPITAL, "--scenario", "battery") as up:
@@ -63,7 +65,15 @@ def test_the_scenario_reruns_after_an_interrupt_at_every_step(tmp_path):
         # The HMI rebuilt the robot's history from the store's log: the last run, after the
         # reset that started it (the page starts the robot's history again there).
         url = f"http://127.0.0.1:{up.hmi_port}/api/history"
-        wait_for(lambda: b'"firing"' in urllib.request.urlopen(url, timeout=5).read(), 30)
+
+        def history_read() -> bool:
+            try:
+                with urllib.request.urlopen(url, timeout=5) as reply:
+                    return b'"firing"' in reply.read()
+            except OSError:
+                return False  # the HMI is still starting
+
+        wait_for(history_read, 60, "the HMI's history", up.logs)
         with urllib.request.urlopen(url, timeout=5) as reply:
             kinds = [e["kind"] for e in json.load(reply) if e["robot"] == "robot1"]
         last_run = kinds[len(kinds) - kinds[::-1].index("reset") :]

@@ -15,6 +15,7 @@ import urllib.error
 import urllib.request
 
 import pytest
+from hmipage import hmi_post
 from rdflib import Literal, Namespace
 from uprun import Up
 
@@ -34,17 +35,8 @@ def robots_shown(port: int) -> dict[str, dict]:
 
 
 def post(port: int, path: str, body: dict) -> int:
-    """POST to the HMI; return the HTTP status."""
-    request = urllib.request.Request(
-        f"http://127.0.0.1:{port}{path}",
-        data=json.dumps(body).encode(),
-        headers={"Content-Type": "application/json"},
-    )
-    try:
-        with urllib.request.urlopen(request, timeout=10) as reply:
-            return reply.status
-    except urllib.error.HTTPError as exc:
-        return exc.code
+    """POST to the HMI as its page does; return the HTTP status."""
+    return hmi_post(port, path, body)[0]
 
 
 @pytest.mark.parametrize("reasoners", ["one for the fleet", "one per robot"])
@@ -97,8 +89,13 @@ def test_the_fleet_works_in_secure_mode_and_the_hmi_cannot_set_a_battery(tmp_pat
             else:
                 agents.add("reasoner")
             wait_for(lambda: set(alive_agents(ts.session, "fleet")) == agents, 30, "every agent")
-            present = ts.query((None, AC.presence, Literal("present")))
-            assert {s for s, _p, _o in present} == {AC[r] for r in names}
+            wait_for(
+                lambda: {s for s, _p, _o in ts.query((None, AC.presence, Literal("present")))}
+                == {AC[r] for r in names},
+                30,
+                "every robot present",
+                up.logs,
+            )
             battery = AC.robot2_battery
             ts.write(
                 [
@@ -114,6 +111,12 @@ def test_the_fleet_works_in_secure_mode_and_the_hmi_cannot_set_a_battery(tmp_pat
             return robots if heading else None
 
         robots = wait_for(robot2_heading_to_dock, 60, "robot2 heading to a dock", up.logs)
+        # The reasoner may answer `why` (its one queryable): the low speed, down to the battery.
+        with TripleSpace.open(endpoint, space="fleet", identity=identity) as ts:
+            explained = ts.why((AC.robot2_base, AC.motion_speed, Literal("low")))
+        assert explained, "no explanation of robot2's low speed"
+        facts = {node.triple for e in explained for _depth, node in e.walk()}
+        assert (AC.robot2_battery, AC.battery_level, Literal("very low")) in facts, explained
         for other in ("robot1", "guide1"):
             assert robots[other]["task_type"] == "Idle", robots[other]
         logs = "\n".join(p.read_text() for p in (up.data / "logs").glob("*.log"))

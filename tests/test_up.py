@@ -11,6 +11,7 @@ import urllib.request
 from pathlib import Path
 
 import pytest
+from hmipage import hmi_post
 from uprun import Up, alive
 
 from conftest import REPO, free_port, tspace_cmd, wait_for
@@ -186,13 +187,9 @@ def test_up_outside_the_project_runs_the_hospital_and_moves_off_a_taken_default_
 
 
 def post(port: int, path: str, body: dict) -> dict:
-    request = urllib.request.Request(
-        f"http://127.0.0.1:{port}{path}",
-        data=json.dumps(body).encode(),
-        headers={"Content-Type": "application/json"},
-    )
-    with urllib.request.urlopen(request, timeout=10) as reply:
-        return json.load(reply)
+    status, answer = hmi_post(port, path, body)
+    assert status == 200, answer
+    return answer
 
 
 def robots_shown(port: int) -> dict[str, dict]:

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 
 import pytest
 from agentprocs import HOSPITAL, value
 from rdflib import RDF, Literal, Namespace
 
-from conftest import AC_NS, wait_for
+from conftest import AC_NS, REPO, wait_for
 from space import NoReasoner, TripleSpace
 
 AC = Namespace(AC_NS)
@@ -91,3 +93,15 @@ def test_a_malformed_why_request_gets_an_error_and_the_reasoner_lives_on(ts, ver
     assert "msgpack" in replies[0].err.payload.to_string()
     assert reasoner.alive()
     assert len(ts.why((AC.robot1_base, AC.motion_speed, None))) == 1
+
+
+def test_the_wire_format_example_asks_why_with_zenoh_and_msgpack_only(ts, very_low, server):
+    """docs/wire-format.md's example, as written there, on the test's router and space."""
+    doc = (REPO / "docs" / "wire-format.md").read_text()
+    section = doc.split("### Explanations: `@/why`", 1)[1]
+    code = section.split("```python\n", 1)[1].split("```", 1)[0]
+    code = code.replace("tcp/127.0.0.1:7447", server.endpoint)
+    code = code.replace("tspace/hospital/", f"tspace/{ts.space}/")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert LOW_SPEED in done.stdout and "motion_speed" in done.stdout, done.stdout

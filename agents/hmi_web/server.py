@@ -7,7 +7,7 @@ never touches the space: it reads the latest state and history from a
 through a `Commands` queue. State-changing requests pass `guard.Guard` first.
 
 Routes:
-    GET  /             the page (index.html, hmi.js, hmi.css, vendor/ beside this module)
+    GET  /             the page (index.html, hmi.js, plots.js, why.js, hmi.css, vendor/ here)
     GET  /api/state    the state as JSON
     GET  /api/history  the history events kept, as a JSON list
     GET  /api/why?t=[s,p,o]...  why each triple (N-Triples, null for any) holds
@@ -40,6 +40,8 @@ HISTORY_KEPT = 20_000  # history events the board keeps for pages that (re)load
 PAGE = "index.html"
 STATIC = {
     "/hmi.js": ("hmi.js", "text/javascript; charset=utf-8"),
+    "/plots.js": ("plots.js", "text/javascript; charset=utf-8"),
+    "/why.js": ("why.js", "text/javascript; charset=utf-8"),
     "/hmi.css": ("hmi.css", "text/css; charset=utf-8"),
     "/vendor/uPlot.iife.min.js": ("vendor/uPlot.iife.min.js", "text/javascript; charset=utf-8"),
     "/vendor/uPlot.min.css": ("vendor/uPlot.min.css", "text/css; charset=utf-8"),

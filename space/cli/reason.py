@@ -18,7 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "owl:FunctionalProperty in the update replaces the asserted old value. "
         "The production rules that fired, and what print() prints, go to stderr. "
         "OWL RL runs with the rules only when an --ontology is given (and not --no-owl); "
-        "otherwise only the rules run, as Jena's GenericRuleReasoner runs them.",
+        "otherwise only the rules run, as Jena's GenericRuleReasoner runs them. "
+        "The OWL 2 RL conflicts (triples that cannot all hold) are listed on stderr.",
     )
     p.add_argument("--rules", nargs="+", required=True, metavar="RULES", help="rules files")
     p.add_argument("--data", nargs="+", required=True, metavar="DATA", help="RDF data files")
@@ -44,14 +45,15 @@ def run(args: argparse.Namespace) -> int:
     from rdflib import OWL, RDF, Graph, Literal, URIRef
 
     from space.functional import replace_functional
-    from space.reasoning import Origin, RuleEngine, read_graph
+    from space.reasoning import Origin, read_graph
+    from space.reasoning.hybrid import engine_from_files
 
     ontology = read_graph(args.ontology)
 
     def to_stderr(text: str) -> None:
         print(text, file=sys.stderr)
 
-    engine = RuleEngine.from_files(
+    engine = engine_from_files(
         rules=args.rules,
         ontology=args.ontology,
         owl=bool(args.ontology) and not args.no_owl,
@@ -72,6 +74,8 @@ def run(args: argparse.Namespace) -> int:
                 f"asserted {len(firing.asserted)}",
                 file=sys.stderr,
             )
+    for conflict in engine.conflicts():
+        print(f"# conflict {conflict}", file=sys.stderr)
     origin = {"all": None, "asserted": Origin.ASSERTED, "inferred": Origin.INFERRED}[args.show]
     out = Graph()
     for prefix, namespace in (*ontology.namespaces(), *read_graph(args.data).namespaces()):

@@ -1,15 +1,19 @@
 """The reasoning engine: Jena rules and OWL RL, kept up to date incrementally."""
 
 from space.reasoning.builtins import Builtin, Registry, default_registry
+from space.reasoning.bulk import read_triples
+from space.reasoning.conflicts import Conflict
 from space.reasoning.delta import Delta, Firing, Origin, TripleChange, Why
 from space.reasoning.engine import RuleEngine, read_graph
 from space.reasoning.errors import RuleError, RuleLoopError, RuleSyntaxError
 from space.reasoning.explain import Explainer
+from space.reasoning.owl_profile import UnsupportedAxiom
 from space.reasoning.parser import load_rules, parse_rules
 from space.reasoning.rules import Rule
 
 __all__ = [
     "Builtin",
+    "Conflict",
     "Delta",
     "Explainer",
     "Firing",
@@ -21,9 +25,11 @@ __all__ = [
     "RuleLoopError",
     "RuleSyntaxError",
     "TripleChange",
+    "UnsupportedAxiom",
     "Why",
     "default_registry",
     "load_rules",
     "parse_rules",
     "read_graph",
+    "read_triples",
 ]

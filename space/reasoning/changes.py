@@ -44,6 +44,13 @@ class ChangeLog:
         if t not in before:
             before[t] = _STATES[t in self._triples][t in self._asserted]
 
+    def net(self) -> tuple[list[T], list[T]]:
+        """Return the triples (functor-valued ones too) present now and not before, and back."""
+        triples = self._triples
+        added = [t for t, (was, _) in self._before.items() if not was and t in triples]
+        removed = [t for t, (was, _) in self._before.items() if was and t not in triples]
+        return added, removed
+
     def delta(self, firings: tuple[Firing, ...]) -> Delta:
         """Return the net change since `begin`."""
         added: list[TripleChange] = []

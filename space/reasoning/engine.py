@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 
-from rdflib import BNode, Graph, URIRef
+from rdflib import OWL, BNode, Graph, URIRef
 from rdflib.term import Node
 
 from space._turtle import read_turtle
@@ -23,6 +23,7 @@ from space.reasoning.builtins import Context, Registry, default_registry
 from space.reasoning.changes import ChangeLog
 from space.reasoning.checks import check_rule, mark_shared_names
 from space.reasoning.compile import CompiledRule, RuleIndex
+from space.reasoning.conflicts import Conflict, read_conflicts
 from space.reasoning.delta import Delta, Firing, Origin, Why
 from space.reasoning.errors import RuleError, RuleLoopError, unreadable
 from space.reasoning.forms import value_patterns
@@ -33,6 +34,7 @@ from space.reasoning.rules import Rule
 from space.reasoning.support import Support
 from space.reasoning.terms import FunctorValue, TermTable
 from space.reasoning.triples import T, TripleStore
+from space.reasoning.view import live_graph
 from space.terms import Triple
 
 
@@ -62,6 +64,7 @@ class RuleEngine:
         owl: bool = True,
         max_firings: int = 10_000,
         printer: Callable[[str], None] = print,
+        terms: TermTable | None = None,
     ) -> None:
         self.registry = registry or default_registry()
         self.rules = tuple(mark_shared_names(rules))
@@ -69,7 +72,7 @@ class RuleEngine:
             check_rule(rule)
         runnable = [value_patterns(r, self.registry) for r in self.rules]
         tbox = ontology if isinstance(ontology, Graph) else _graph(ontology or ())
-        self.terms = TermTable()
+        self.terms = TermTable() if terms is None else terms  # HybridEngine: shared
         self._store = TripleStore()
         self._ctx = Context(self.terms, self._store, printer)
         compiler = JoinCompiler(self.terms, self._store, self._ctx)
@@ -89,6 +92,7 @@ class RuleEngine:
         self._production = True
         self._loaded = False
         self._graph: Graph | None = None
+        self._same = self.terms.id(OWL.sameAs)
 
     @classmethod
     def from_files(
@@ -109,10 +113,20 @@ class RuleEngine:
 
     @property
     def graph(self) -> Graph:
-        """Return the current state (asserted and inferred) as an rdflib Graph; do not modify it."""
+        """Return the current state (asserted and inferred) as a live, read-only rdflib Graph.
+
+        It reads the engine through `match` on every lookup: after an update it
+        shows the new state at once, and reading costs what is read.
+        """
         if self._graph is None:
-            self._graph = _graph(self.triples())
+            self._graph = live_graph(self)
         return self._graph
+
+    def count(self) -> int:
+        """Return how many triples the state holds (asserted and inferred)."""
+        osp, functors = self._store.osp, self.terms.functors
+        hidden = sum(len(ps) for f in functors for ps in osp.get(f, {}).values())
+        return len(self._store) - hidden
 
     def triples(self, origin: Origin | None = None) -> Iterator[Triple]:
         """Yield the current triples, or only the asserted or only the inferred ones."""
@@ -142,7 +156,21 @@ class RuleEngine:
 
     def __contains__(self, triple: object) -> bool:
         ids = tuple(self.terms.find(x) for x in triple) if isinstance(triple, tuple) else ()
+        if len(ids) == 3 and ids[0] == ids[2] and ids[0] is not None and ids[1] == self._same:
+            return self._in_state(ids[0])  # eq-ref, answered rather than stored
         return len(ids) == 3 and ids in self._store
+
+    def _in_state(self, term: int) -> bool:
+        store = self._store
+        return term in store.spo or term in store.pos or term in store.osp
+
+    def conflicts(self) -> tuple[Conflict, ...]:
+        """Return the conflicts that hold now (OWL 2 RL rules with head `false`), sorted.
+
+        Costs what the conflicts are. A conflict goes when one of its triples does.
+        """
+        labels = [c.label for c in self._compiled]
+        return read_conflicts(self.terms, self._store, self._support, labels)
 
     def load(self, triples: Graph | Iterable[Triple] = ()) -> Delta:
         """Assert the initial state (with the ontology) and run the rules to a fixpoint.
@@ -169,8 +197,10 @@ class RuleEngine:
                 caller's triples and what the monotonic rules draw from them are kept,
                 and the error's `kept` is that net change, to publish like any delta.
         """
-        plus = [self._encode(t) for t in added]
-        minus = [self._encode(t) for t in removed]
+        return self._apply_ids([self._encode(t) for t in added], [self._encode(t) for t in removed])
+
+    def _apply_ids(self, plus: list[T], minus: list[T]) -> Delta:
+        """`apply` on encoded triples (a HybridEngine passes its forward layer's changes)."""
         if not self._loaded:
             plus = self._ontology + plus
         self._log.begin(plus, minus)
@@ -190,7 +220,6 @@ class RuleEngine:
             self._undo()
             raise
         self._loaded = True
-        self._graph = None
         return self._log.delta(tuple(self._firings))
 
     def _apply_monotonic(self, plus: list[T], minus: list[T]) -> Delta:
@@ -392,7 +421,6 @@ class RuleEngine:
         finally:
             self._production = True
             self._agenda.reset()
-            self._graph = None
 
 
 def read_graph(paths: Iterable[str | Path]) -> Graph:

@@ -17,6 +17,7 @@ from decimal import Decimal
 from rdflib import Literal
 
 from space.reasoning.builtins import Builtin, Effect, Registry
+from space.reasoning.builtins.javaregex import JavaRegexError, translate
 from space.reasoning.checks import located
 from space.reasoning.errors import RuleError
 from space.reasoning.rules import Call, Functor, Item, Pattern, Rule, Term, Var, variables
@@ -90,6 +91,26 @@ def _by_value(term: Term, tests: list[Call], equal: Builtin, item: Pattern) -> T
 def _numeric(term: Literal) -> bool:
     value = term.value
     return isinstance(value, _NUMBERS) and not isinstance(value, bool)
+
+
+def regex_groups(rule: Rule) -> Rule:
+    """Return the rule with each `regex` call given no more output arguments than its constant
+    pattern has groups: Jena binds the groups it has and leaves the other variables unbound
+    (a head then makes them blank nodes), where an output here must be bound or the call fails.
+    """
+    body: list[Item] = []
+    for item in rule.body:
+        if isinstance(item, Call) and item.name == "regex" and len(item.args) > 2:
+            pattern = item.args[1]
+            if isinstance(pattern, Literal):
+                try:
+                    groups = translate(str(pattern)).groups
+                except JavaRegexError:
+                    groups = len(item.args)  # refused with the reason when the rule is checked
+                if len(item.args) - 2 > groups:
+                    item = Call(item.builtin, item.args[: 2 + groups], item.where)
+        body.append(item)
+    return Rule(rule.name, tuple(body), rule.head, rule.where, rule.backward)
 
 
 def blank_head_variables(rule: Rule, registry: Registry) -> Rule:

@@ -26,7 +26,7 @@ from rdflib import BNode, Literal, URIRef
 from space.reasoning.builtins import Registry
 from space.reasoning.checks import check_rule, located, mark_shared_names
 from space.reasoning.errors import RuleError, RuleSyntaxError, unreadable
-from space.reasoning.forms import blank_head_variables, flatten
+from space.reasoning.forms import blank_head_variables, flatten, regex_groups
 from space.reasoning.listmaps import expand_list_maps
 from space.reasoning.rules import Call, Functor, Item, Location, Pattern, Rule, Term, Var
 from space.reasoning.rulesets import is_builtin_ruleset, read_builtin_ruleset
@@ -140,7 +140,7 @@ class _Reader:
         while not parser.done():
             for nested in flatten(parser.rule()):
                 for rule in expand_list_maps(nested, self.registry):
-                    rule = blank_head_variables(rule, self.registry)
+                    rule = blank_head_variables(regex_groups(rule), self.registry)
                     check_rule(rule)
                     yield rule
 

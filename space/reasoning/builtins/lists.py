@@ -105,11 +105,21 @@ def _equal(ctx: Context, args: Args) -> bool | None:
     a, b = members(ctx, args[0]), members(ctx, args[1])
     if a is None or b is None:
         return None
-    return len(a) == len(b) and all(ctx.terms.same_value(x, y) for x, y in zip(a, b, strict=True))
+    if len(a) != len(b):
+        return False
+    # As Jena: each entry of the first consumes one equal (by value) entry of the second, in
+    # any order, so the lists are equal as multisets.
+    rest = list(b)
+    for x in a:
+        hit = next((i for i, y in enumerate(rest) if ctx.terms.same_value(x, y)), None)
+        if hit is None:
+            return False
+        del rest[hit]
+    return True
 
 
 class ListEqual(Builtin):
-    """Accept when both lists have the same entries (by value) in the same order."""
+    """Accept when both lists have the same entries (by value), in any order, as Jena."""
 
     name = "listEqual"
     arity = (2, 2)

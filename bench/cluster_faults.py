@@ -1,0 +1,126 @@
+"""The etcd log under long faults: 3 hosts in network namespaces, each an etcd member and a node.
+
+Every node writes and races the others to take the same items while the
+faults run (tests/logfleet.py); after each scenario writing stops and the
+checker compares every acknowledged operation with every replica. The short
+version of this is tests/test_cluster_faults.py. Needs root.
+
+Scenarios (issue 10): a minority cut (10 s), a cut of the leader's host
+(10 s), flapping links (a random host cut every 5 s for 60 s, 2.5 s each),
+kill -9 of the leading member and of a replica, 5 times.
+
+    .venv/bin/python bench/cluster_faults.py [--flap-seconds 60]
+"""
+
+from __future__ import annotations
+
+import argparse
+import random
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from _harness import print_table
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from logfleet import NAMES, LogFleet, check
+from netns import Network, netns_unavailable
+
+
+def minority_cut(fleet: LogFleet, seconds: float) -> None:
+    with fleet.net["c"].outage(seconds):
+        pass
+
+
+def leader_cut(fleet: LogFleet, seconds: float) -> None:
+    with fleet.net[fleet.leader()].outage(seconds):
+        pass
+
+
+def flapping(fleet: LogFleet, seconds: float) -> None:
+    rng = random.Random(7)
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        with fleet.net[rng.choice(NAMES)].outage(2.5):
+            pass
+        time.sleep(2.5)  # the links are up between cuts
+
+
+def kills(fleet: LogFleet, rounds: int) -> None:
+    for _ in range(rounds):
+        leader = fleet.leader()
+        fleet.kill_etcd(leader)
+        fleet.wait_acked(next(h for h in NAMES if h != leader), 10, after=time.time())
+        fleet.start_etcd(leader)
+        victim = random.choice(NAMES)
+        fleet.kill_node(victim)
+        fleet.start_node(victim)
+        fleet.wait_acked(victim, 20, after=time.time())
+
+
+def run(name: str, scenario: Callable[[LogFleet], None]) -> list[object]:
+    with tempfile.TemporaryDirectory(prefix="tsf-") as tmp:
+        with Network(list(NAMES), Path(tmp)) as net:
+            fleet = LogFleet(net)
+            fleet.start()
+            began = time.monotonic()
+            scenario(fleet)
+            for h in NAMES:
+                fleet.wait_acked(h, 30, after=time.time())
+            elapsed = time.monotonic() - began
+            settle = fleet.quiesce()
+            fleet.stop()
+            verdict = check(fleet)
+    refused = ", ".join(f"{k} {v}" for k, v in sorted(verdict.refused.items()))
+    return [
+        name,
+        f"{elapsed:.0f}",
+        verdict.acknowledged,
+        verdict.taken,
+        refused,
+        len(verdict.violations),
+        f"{settle:.2f}",
+        "; ".join(verdict.violations[:3]) or "-",
+        "; ".join(f"{n}x {m}" for m, n in verdict.reasons.most_common(3)) or "-",
+    ]
+
+
+def main(flap: float, cut: float) -> None:
+    reason = netns_unavailable()
+    if reason:
+        sys.exit(f"cannot run: {reason}")
+    scenarios: list[tuple[str, Callable[[LogFleet], None]]] = [
+        (f"minority cut {cut:g} s", lambda f: minority_cut(f, cut)),
+        (f"leader cut {cut:g} s", lambda f: leader_cut(f, cut)),
+        (f"flapping {flap:g} s", lambda f: flapping(f, flap)),
+        ("kill -9 x5", lambda f: kills(f, 5)),
+    ]
+    rows = []
+    for name, scenario in scenarios:
+        rows.append(run(name, scenario))
+        print(rows[-1], flush=True)
+    print_table(
+        "etcd log under faults, 3 hosts (netns), writers and takers on every host",
+        [
+            "scenario",
+            "s",
+            "acked",
+            "taken",
+            "refused",
+            "violations",
+            "identical after s",
+            "first violations",
+            "other refusals",
+        ],
+        rows,
+    )
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--flap-seconds", type=float, default=60.0)
+    parser.add_argument("--cut-seconds", type=float, default=10.0)
+    args = parser.parse_args()
+    main(args.flap_seconds, args.cut_seconds)

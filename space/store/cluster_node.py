@@ -1,0 +1,122 @@
+"""A store replica's link to etcd, for a threaded store: one asyncio loop in its own thread.
+
+The store's worker thread owns Oxigraph; etcd's client is asyncio. A
+`ClusterNode` runs the client, the log (group commit) and the applier on one
+event loop in a daemon thread and offers the worker thread plain calls:
+
+- `append(entry)` returns a `concurrent.futures.Future` of the entry's
+  position: the worker goes on deciding while 64 changesets are in flight;
+- `apply(revision, batches)` and `relist(listing)`, given at
+  construction, are called in the loop thread for each committed revision:
+  they must only hand the work to the worker (a queue), never block;
+- `read_barrier()` returns the revision etcd has committed now (a
+  linearizable read, refused with `NoQuorum` on a minority side): a replica
+  that has applied that revision answers a read as the majority would;
+- `members()` says how many members are reachable, for `tspace up`'s view.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import threading
+from collections.abc import Coroutine, Sequence
+from typing import Any, TypeVar
+
+from aetcd import rpc
+
+from space.store.cluster_keys import ROOT
+from space.store.etcd_applier import Applier, Apply, Relist
+from space.store.etcd_client import EtcdClient
+from space.store.etcd_log import ClusterLog, Entry, Position
+
+T = TypeVar("T")
+
+
+class ClusterNode:
+    """The etcd client, log and applier of one replica, on a loop thread.
+
+    Construct (no side effects), `start()`, then call from any thread;
+    `close()` stops the thread (queued appends fail).
+    """
+
+    def __init__(
+        self,
+        endpoints: Sequence[str],
+        *,
+        node: str,
+        revision: int,
+        apply: Apply,
+        relist: Relist,
+        seqs: dict[str, int] | None = None,
+        root: bytes = ROOT,
+    ) -> None:
+        self.endpoints = list(endpoints)
+        self.node = node
+        self.root = root
+        self._start_revision, self._start_seqs = revision, dict(seqs or {})
+        self._apply, self._relist = apply, relist
+        self._loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=self._loop.run_forever, name="tspace-etcd")
+        self._thread.daemon = True
+        self.client: EtcdClient | None = None
+        self.log: ClusterLog | None = None
+        self.applier: Applier | None = None
+
+    def start(self) -> None:
+        """Start the loop thread, the committers and the applier (does not wait for etcd)."""
+        self._thread.start()
+        self._call(self._open(), timeout=10)
+
+    async def _open(self) -> None:
+        self.client = EtcdClient(self.endpoints)
+        await self.client.open()
+        self.log = ClusterLog(self.client, root=self.root, node=self.node)
+        await self.log.start()
+        self.applier = Applier(
+            self.client,
+            node=self.node,
+            revision=self._start_revision,
+            apply=self._apply,
+            relist=self._relist,
+            seqs=self._start_seqs,
+            root=self.root,
+        )
+        await self.applier.start()
+
+    def close(self) -> None:
+        """Stop applying and committing, close the client and end the thread."""
+        if not self._thread.is_alive():
+            return
+        self._call(self._close(), timeout=10)
+        self._loop.call_soon_threadsafe(self._loop.stop)
+        self._thread.join()
+        self._loop.close()
+
+    async def _close(self) -> None:
+        for part in (self.applier, self.log):
+            if part is not None:
+                await part.close()
+        if self.client is not None:
+            await self.client.close()
+
+    def append(self, entry: Entry) -> concurrent.futures.Future[Position]:
+        """Commit an entry; the future's result is its position (see `ClusterLog.append`)."""
+        assert self.log is not None, "start() first"
+        return asyncio.run_coroutine_threadsafe(self.log.append(entry), self._loop)
+
+    def read_barrier(self, timeout: float = 5.0) -> int:
+        """Return the revision etcd has committed now; raise `NoQuorum` on a minority side."""
+        client = self.client
+        assert client is not None, "start() first"
+        request = rpc.RangeRequest(key=self.root, count_only=True)
+        reply = self._call(client.range(request), timeout)
+        return reply.header.revision
+
+    def members(self, timeout: float = 2.0) -> tuple[int, int]:
+        """Return (members reachable, members) now."""
+        assert self.client is not None, "start() first"
+        return self._call(self.client.reachable(), timeout), len(self.endpoints)
+
+    def _call(self, coro: Coroutine[Any, Any, T], timeout: float) -> T:
+        return asyncio.run_coroutine_threadsafe(coro, self._loop).result(timeout)

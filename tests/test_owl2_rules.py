@@ -1,0 +1,197 @@
+"""OWL 2 RL rules beyond the basics: conflicts, chains, keys, cardinality; exact on deletion."""
+
+from __future__ import annotations
+
+import random
+
+import owlrl
+import pytest
+from rdflib import OWL, RDF, RDFS, BNode, Graph, Literal, Namespace
+from rdflib.collection import Collection
+
+from space.reasoning import RuleEngine, UnsupportedAxiom
+
+EX = Namespace("http://example.org/")
+
+
+def engine(tbox: Graph) -> RuleEngine:
+    e = RuleEngine([], tbox)
+    e.load([])
+    return e
+
+
+def graph(*triples) -> Graph:
+    g = Graph()
+    for t in triples:
+        g.add(t)
+    return g
+
+
+def listed(g: Graph, *items) -> BNode:
+    head = BNode()
+    Collection(g, head, list(items))
+    return head
+
+
+def test_disjoint_classes_conflict_names_the_rule_and_goes_with_its_cause():
+    e = engine(graph((EX.StandbyDevice, OWL.disjointWith, EX.ActiveDevice)))
+    assert e.conflicts() == ()
+    e.apply(added=[(EX.screen, RDF.type, EX.StandbyDevice), (EX.screen, RDF.type, EX.ActiveDevice)])
+    (conflict,) = e.conflicts()
+    assert conflict.rule == "cax-dw"
+    assert set(conflict.triples) == {
+        (EX.StandbyDevice, OWL.disjointWith, EX.ActiveDevice),
+        (EX.screen, RDF.type, EX.StandbyDevice),
+        (EX.screen, RDF.type, EX.ActiveDevice),
+    }
+    # Nothing else is lost: both memberships still hold.
+    assert (EX.screen, RDF.type, EX.ActiveDevice) in e
+    e.apply(removed=[(EX.screen, RDF.type, EX.ActiveDevice)])
+    assert e.conflicts() == ()
+
+
+def test_conflict_through_inference_goes_when_the_premise_of_the_inference_goes():
+    e = engine(
+        graph(
+            (EX.Speaker, RDFS.subClassOf, EX.Device),
+            (EX.Device, OWL.disjointWith, EX.Person),
+        )
+    )
+    e.apply(added=[(EX.bob, RDF.type, EX.Speaker), (EX.bob, RDF.type, EX.Person)])
+    assert [c.rule for c in e.conflicts()] == ["cax-dw"]
+    e.apply(removed=[(EX.bob, RDF.type, EX.Speaker)])
+    assert e.conflicts() == ()
+
+
+def test_property_chain_and_its_retraction():
+    g = Graph()
+    g.add((EX.uncle, OWL.propertyChainAxiom, listed(g, EX.parent, EX.brother)))
+    e = engine(g)
+    e.apply(added=[(EX.ann, EX.parent, EX.bob), (EX.bob, EX.brother, EX.carl)])
+    assert (EX.ann, EX.uncle, EX.carl) in e
+    assert e.why((EX.ann, EX.uncle, EX.carl)).rule == "prp-spo2"
+    e.apply(removed=[(EX.bob, EX.brother, EX.carl)])
+    assert (EX.ann, EX.uncle, EX.carl) not in e
+
+
+def test_keys_make_individuals_the_same_until_a_key_value_goes():
+    g = Graph()
+    g.add((EX.Robot, OWL.hasKey, listed(g, EX.serial)))
+    e = engine(g)
+    e.apply(
+        added=[
+            (EX.r1, RDF.type, EX.Robot),
+            (EX.r2, RDF.type, EX.Robot),
+            (EX.r1, EX.serial, Literal("A7")),
+            (EX.r2, EX.serial, Literal("A7")),
+        ]
+    )
+    assert (EX.r1, OWL.sameAs, EX.r2) in e
+    e.apply(removed=[(EX.r2, EX.serial, Literal("A7"))])
+    assert (EX.r1, OWL.sameAs, EX.r2) not in e
+
+
+def test_max_cardinality_one_and_zero():
+    g = Graph()
+    one, zero = BNode(), BNode()
+    for r, n, prop in ((one, 1, EX.dock), (zero, 0, EX.patient)):
+        g.add((r, RDF.type, OWL.Restriction))
+        g.add((r, OWL.onProperty, prop))
+        g.add((r, OWL.maxCardinality, Literal(n)))
+        g.add((EX.Robot, RDFS.subClassOf, r))
+    e = engine(g)
+    e.apply(added=[(EX.r, RDF.type, EX.Robot), (EX.r, EX.dock, EX.d1), (EX.r, EX.dock, EX.d2)])
+    assert (EX.d1, OWL.sameAs, EX.d2) in e
+    assert e.conflicts() == ()
+    e.apply(added=[(EX.r, EX.patient, EX.p)])
+    assert [c.rule for c in e.conflicts()] == ["cls-maxc1"]
+
+
+def test_functional_data_property_with_two_values_is_a_conflict():
+    e = engine(graph((EX.battery, RDF.type, OWL.FunctionalProperty)))
+    e.apply(added=[(EX.r, EX.battery, Literal(40)), (EX.r, EX.battery, Literal(40.0))])
+    assert e.conflicts() == ()  # one value, written twice
+    e.apply(added=[(EX.r, EX.battery, Literal(35))])
+    assert {c.rule for c in e.conflicts()} == {"prp-fp"}
+
+
+def test_axiomatic_triples_and_schema_reflexivity():
+    e = engine(graph((EX.Robot, RDF.type, OWL.Class), (EX.p, RDF.type, OWL.ObjectProperty)))
+    assert (OWL.Thing, RDF.type, OWL.Class) in e
+    assert (RDFS.label, RDF.type, OWL.AnnotationProperty) in e
+    assert (EX.Robot, RDFS.subClassOf, OWL.Thing) in e
+    assert (EX.p, OWL.equivalentProperty, EX.p) in e
+    assert (EX.Robot, OWL.sameAs, EX.Robot) in e
+    assert (EX.nobody, OWL.sameAs, EX.nobody) not in e
+
+
+def test_constructs_outside_rl_are_named_in_a_warning():
+    r = BNode()
+    g = graph(
+        (r, RDF.type, OWL.Restriction),
+        (r, OWL.onProperty, EX.has_wheel),
+        (r, OWL.minCardinality, Literal(2)),
+        (EX.Robot, RDFS.subClassOf, r),
+        (EX.near, RDF.type, OWL.ReflexiveProperty),
+    )
+    with pytest.warns(UnsupportedAxiom) as caught:
+        RuleEngine([], g)
+    messages = [str(w.message) for w in caught]
+    assert any("owl:minCardinality" in m and "has_wheel" in m for m in messages)
+    assert any("owl:ReflexiveProperty" in m and "near" in m for m in messages)
+
+
+def _random_ontology(seed: int) -> tuple[Graph, list]:
+    """Return a small random RL ontology and random instance data over it."""
+    rnd = random.Random(seed)
+    classes = [EX[f"C{i}"] for i in range(6)]
+    props = [EX[f"p{i}"] for i in range(5)]
+    people = [EX[f"i{i}"] for i in range(8)]
+    g = Graph()
+    for _ in range(6):
+        g.add((rnd.choice(classes), RDFS.subClassOf, rnd.choice(classes)))
+    for _ in range(3):
+        g.add((rnd.choice(props), RDFS.subPropertyOf, rnd.choice(props)))
+    g.add((rnd.choice(props), RDFS.domain, rnd.choice(classes)))
+    g.add((rnd.choice(props), RDFS.range, rnd.choice(classes)))
+    g.add((rnd.choice(props), OWL.inverseOf, rnd.choice(props)))
+    g.add((rnd.choice(props), RDF.type, OWL.TransitiveProperty))
+    g.add((rnd.choice(props), RDF.type, OWL.SymmetricProperty))
+    g.add((rnd.choice(props), OWL.propertyChainAxiom, listed(g, *rnd.sample(props, 2))))
+    g.add((rnd.choice(classes), OWL.intersectionOf, listed(g, *rnd.sample(classes, 2))))
+    g.add((rnd.choice(classes), OWL.unionOf, listed(g, *rnd.sample(classes, 2))))
+    r = BNode()
+    g.add((r, OWL.onProperty, rnd.choice(props)))
+    g.add((r, OWL.someValuesFrom, rnd.choice(classes)))
+    g.add((r, RDFS.subClassOf, rnd.choice(classes)))
+    data = [(rnd.choice(people), RDF.type, rnd.choice(classes)) for _ in range(8)]
+    data += [(rnd.choice(people), rnd.choice(props), rnd.choice(people)) for _ in range(10)]
+    return g, list(dict.fromkeys(data))
+
+
+def _instances(triples) -> set:
+    """Keep what both reasoners must agree on: memberships of named classes and property values."""
+    return {
+        t
+        for t in triples
+        if str(t[0]).startswith(str(EX))
+        and str(t[2]).startswith(str(EX))
+        and (t[1] == RDF.type or str(t[1]).startswith(str(EX)))
+    }
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_instances_equal_owlrl_on_generated_ontologies(seed):
+    g, data = _random_ontology(seed)
+    e = RuleEngine([], g)
+    e.load(data)
+    theirs = Graph()
+    for t in (*g, *data):
+        theirs.add(t)
+    owlrl.DeductiveClosure(owlrl.OWLRL_Semantics).expand(theirs)
+    assert _instances(e.triples()) == _instances(theirs)
+    # And after deleting half of the data, a fresh closure's.
+    e.apply(removed=data[::2])
+    fresh = RuleEngine([], g)
+    fresh.load(data[1::2])
+    assert set(e.triples()) == set(fresh.triples())
