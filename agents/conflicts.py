@@ -22,8 +22,8 @@ from collections.abc import Iterable
 from rdflib import OWL, RDF, RDFS, Literal, Namespace, URIRef
 from rdflib.term import Node
 
+from space import Triple, triple_to_nt
 from space.reasoning import Conflict
-from space.terms import Triple, triple_to_nt
 
 TR = Namespace("https://w3id.org/tspace/reasoning#")
 _VOCABULARIES = (str(RDF), str(RDFS), str(OWL))

@@ -290,6 +290,9 @@ def test_the_readme_python_example_runs_on_a_fresh_space(server, space_name):
     example = readme.split("## From Python", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
     assert 'space="hospital"' in example and '"tcp/127.0.0.1:7447"' in example
     example = example.replace('space="hospital"', f'space="{space_name}"')
+    # Its last lines ask a reasoner `why`: test_readme runs them against `tspace up`.
+    example, why = example.split("    for tree in ts.why(", 1)
+    assert "tree.rule" in why
     example = example.replace('"tcp/127.0.0.1:7447"', f'"{server.endpoint}"')
     out = subprocess.run(
         [sys.executable, "-c", example], capture_output=True, text=True, timeout=60
