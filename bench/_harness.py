@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import socket
 import statistics
 import subprocess
@@ -22,15 +23,37 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+def code_env(code: Path | None) -> dict[str, str]:
+    """Return the environment that runs `python -m space...` from the source tree `code`."""
+    env = dict(os.environ)
+    if code is not None:
+        env["PYTHONPATH"] = str(code)
+    return env
+
+
 @contextmanager
 def serve(secure: Path | None = None) -> Iterator[str]:
     """Run `tspace serve` on a fresh data dir; yield its endpoint; stop it after.
 
     With `secure` (a `tspace certs` directory), mutual TLS and the shipped policy.
     """
+    with serve_process(None, secure=secure) as (endpoint, _pid):
+        yield endpoint
+
+
+@contextmanager
+def serve_process(
+    code: Path | None = None, *extra: str, secure: Path | None = None
+) -> Iterator[tuple[str, int]]:
+    """Run `tspace serve` on a fresh data dir; yield its endpoint and pid; stop it after.
+
+    `code`: a source tree to run the server from (an older commit's worktree),
+    instead of the installed one; `extra`: more `serve` options; `secure` (a
+    `tspace certs` directory): mutual TLS and the shipped policy.
+    """
     endpoint = f"{'tls' if secure else 'tcp'}/127.0.0.1:{free_port()}"
     identity = load_identity(secure, "operator") if secure else None
-    extra = ["--secure", str(secure)] if secure else []
+    extra = (*extra, "--secure", str(secure)) if secure else extra
     with tempfile.TemporaryDirectory() as data:
         proc = subprocess.Popen(
             [
@@ -45,6 +68,8 @@ def serve(secure: Path | None = None) -> Iterator[str]:
                 *extra,
             ],
             stderr=subprocess.DEVNULL,
+            env=code_env(code),
+            cwd=str(code) if code is not None else None,
         )
         try:
             deadline = time.monotonic() + 20
@@ -57,10 +82,14 @@ def serve(secure: Path | None = None) -> Iterator[str]:
                     if time.monotonic() > deadline:
                         raise
                     time.sleep(0.05)
-            yield endpoint
+            yield endpoint, proc.pid
         finally:
             proc.terminate()
-            proc.wait(timeout=10)
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:  # still busy (an old store finishing a query)
+                proc.kill()
+                proc.wait()
 
 
 def percentile(values: Sequence[float], q: float) -> float:

@@ -1,6 +1,9 @@
 """Benchmark the triple space: notification latency, write throughput, 10k-triple query.
 
-Run: python bench/space_bench.py [--runs 5]
+Run: python bench/space_bench.py [--runs 5] [--store] [--old DIR --plot docs/store-bench.png]
+With --old (a worktree of the code before: `git worktree add /tmp/old a5d5dd9`) every run
+measures the server from that tree and from this one, interleaved; the clients are this tree's
+(the wire format is compatible both ways), so the difference is the store's.
 Every figure is a median over runs; the store, the subscriber and the writer
 are separate processes talking through the router on loopback.
 """
@@ -14,7 +17,8 @@ import time
 from collections import deque
 from pathlib import Path
 
-from _harness import median, percentile, print_table, serve
+import _store_measures as store
+from _harness import median, percentile, print_table, serve_process
 from rdflib import Literal, Namespace, URIRef
 
 from space import TripleSpace
@@ -114,32 +118,96 @@ def query_10k(endpoint: str, space: str) -> tuple[float, float]:
     return cli, library
 
 
+def measure(endpoint: str, pid: int, code: Path | None, run: int, args) -> dict[str, float]:
+    """Return every figure of one run against one server."""
+    rows: dict[str, float] = {}
+    p50, p99 = latency(endpoint, f"lat{run}", args.count, nowait=False)
+    rows["latency write()->notify p50 (ms)"] = p50
+    rows["latency write()->notify p99 (ms)"] = p99
+    for mode in ("acked", "pipelined"):
+        rows[f"throughput, {THROUGHPUT[mode]} of 100 (triples/s)"] = throughput(
+            endpoint, f"thr{mode}{run}", 200, 100, mode
+        )
+    cli, lib = query_10k(endpoint, f"q{run}")
+    rows["tspace query, 10,000 triples, whole CLI (s)"] = cli
+    rows["TripleSpace.query, 10,000 triples (s)"] = lib
+    if args.store:
+        space = f"sparql{run}"
+        started = time.perf_counter()
+        store.load_100k(endpoint, space)
+        rows["write 100,000 triples, 1,000 a changeset, 16 in flight (s)"] = (
+            time.perf_counter() - started
+        )
+        for name, seconds in store.sparql_times(endpoint, space, 3).items():
+            rows[f"SPARQL on 100k: {name} (ms)"] = seconds * 1000
+        took, w50, w99, wmax = store.writes_beside_a_slow_query(endpoint)
+        rows["a slow query's duration (s)"] = took
+        rows["100 acked writes beside it, p50 (ms)"] = w50
+        rows["100 acked writes beside it, p99 (ms)"] = w99
+        rows["100 acked writes beside it, max (ms)"] = wmax
+        rows[f"tspace write of {args.bulk:,} triples (triples/s)"] = store.bulk_write(
+            endpoint, code, args.bulk
+        )
+        rows["store RSS after all of the above (MB)"] = store.rss_mb(pid)
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--count", type=int, default=1000, help="changesets per latency run")
-    args = parser.parse_args()
-    rows: dict[str, list[float]] = {}
-    with serve() as endpoint:
-        for run in range(args.runs):
-            p50, p99 = latency(endpoint, f"lat{run}", args.count, nowait=False)
-            rows.setdefault("latency write()->notify p50 (ms)", []).append(p50)
-            rows.setdefault("latency write()->notify p99 (ms)", []).append(p99)
-            p50, p99 = latency(endpoint, f"latn{run}", args.count, nowait=True)
-            rows.setdefault("latency write_nowait()->notify p50 (ms)", []).append(p50)
-            rows.setdefault("latency write_nowait()->notify p99 (ms)", []).append(p99)
-            for mode, label in THROUGHPUT.items():
-                rows.setdefault(f"throughput, {label} of 100 (triples/s)", []).append(
-                    throughput(endpoint, f"thr{mode}{run}", 200, 100, mode)
-                )
-            cli, lib = query_10k(endpoint, f"q{run}")
-            rows.setdefault("tspace query, 10,000 triples, whole CLI (s)", []).append(cli)
-            rows.setdefault("TripleSpace.query, 10,000 triples (s)", []).append(lib)
-    print_table(
-        f"tspace space benchmark, medians of {args.runs} runs",
-        ["measure", "median", "min", "max"],
-        [(name, median(v), min(v), max(v)) for name, v in rows.items()],
+    parser.add_argument(
+        "--old", type=Path, help="a source tree of the code before (git worktree add DIR REV)"
     )
+    parser.add_argument(
+        "--store",
+        action="store_true",
+        help="also SPARQL on 100k, writes beside a slow query, "
+        "a bulk tspace write and the store's RSS",
+    )
+    parser.add_argument("--bulk", type=int, default=100_000, help="triples of the bulk write")
+    parser.add_argument("--plot", type=Path, help="write a PNG of new vs old here")
+    args = parser.parse_args()
+    codes: dict[str, Path | None] = {"new": None}
+    if args.old is not None:
+        codes = {"old": args.old.resolve(), "new": None}
+    results: dict[str, dict[str, list[float]]] = {name: {} for name in codes}
+    for run in range(args.runs):
+        for name, code in codes.items():  # interleaved, so that the machine's moods hit both
+            with serve_process(code) as (endpoint, pid):
+                for measure_name, value in measure(endpoint, pid, code, run, args).items():
+                    results[name].setdefault(measure_name, []).append(value)
+                    print(f"  run {run + 1} {name}: {measure_name} = {value:.3f}", file=sys.stderr)
+    names = list(results["new"])
+    header = ["measure", *(f"{n} median" for n in codes), *(f"{n} min..max" for n in codes)]
+    rows = []
+    for m in names:
+        values = [results[n].get(m, [float("nan")]) for n in codes]
+        rows.append(
+            (m, *(median(v) for v in values), *(f"{min(v):.3f}..{max(v):.3f}" for v in values))
+        )
+    print_table(f"tspace space benchmark, medians of {args.runs} runs", header, rows)
+    if args.plot is not None and "old" in results:
+        plot(results, names, args.plot)
+
+
+def plot(results: dict[str, dict[str, list[float]]], names: list[str], path: Path) -> None:
+    """Draw new/old per measure (medians) as horizontal bars; > 1 means the new one is larger."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ratios = [median(results["new"][m]) / median(results["old"][m]) for m in names]
+    fig, ax = plt.subplots(figsize=(9, 0.4 * len(names) + 1))
+    ax.barh(names, ratios, color=["tab:green" if "/s" in m else "tab:blue" for m in names])
+    ax.axvline(1.0, color="black", linewidth=0.8)
+    ax.set_xscale("log")
+    ax.set_xlabel("new / old (median; triples/s: higher is better, times and MB: lower)")
+    ax.invert_yaxis()
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(f"plot: {path}")
 
 
 if __name__ == "__main__":

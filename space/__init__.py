@@ -9,6 +9,7 @@ from space._paths import default_data_dir
 from space._ports import any_free_port
 from space._ports import probe as probe_port
 from space._turtle import read_turtle
+from space.ack import Ack, Dropped
 from space.changeset import Changeset
 from space.cli.options import add_connect, identity_of
 from space.client import Transaction, TripleSpace
@@ -17,7 +18,9 @@ from space.errors import (
     InputError,
     MalformedPayload,
     NoReasoner,
+    NotApplied,
     QueryError,
+    QueryTimeLimit,
     SpaceError,
     SpaceTimeout,
     SpaceUnavailable,
@@ -45,18 +48,22 @@ __all__ = [
     "DEFAULT_ENDPOINT",
     "KEY_ROOT",
     "SECURE_ENDPOINT",
+    "Ack",
     "Change",
     "ChangeRecord",
     "Changeset",
     "ChangesetRejected",
+    "Dropped",
     "Explanation",
     "Identity",
     "InputError",
     "MalformedPayload",
     "NoReasoner",
+    "NotApplied",
     "Pending",
     "PrefixMap",
     "QueryError",
+    "QueryTimeLimit",
     "Replacement",
     "SpaceError",
     "SpaceMirror",

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import io
 import logging
+import uuid
 from collections.abc import Iterable, Iterator
 from contextlib import ExitStack, contextmanager
 from types import TracebackType
@@ -20,6 +21,7 @@ from rdflib import Graph, URIRef
 from rdflib.query import Result
 
 from space import keys
+from space.ack import Ack
 from space.changeset import Changeset, pack, unpack
 from space.errors import (
     MalformedPayload,
@@ -61,10 +63,12 @@ class TripleSpace:
         *,
         agent: str | None = None,
         prefixes: dict[str, str] | None = None,
+        strict: bool = False,
         writer: str | None = None,
         _owns_session: bool = False,
     ) -> None:
         self.session = session
+        self.strict = strict
         self.space = keys.check_space(space)
         # In a secure space a router lets each identity write (and take) only on
         # keys that end with its own name, so the store knows who wrote.
@@ -86,14 +90,17 @@ class TripleSpace:
         config_file: str | None = None,
         mode: str = "client",
         prefixes: dict[str, str] | None = None,
+        strict: bool = False,
         identity: Identity | None = None,
     ) -> TripleSpace:
         """Open a session to the routers at `connect` and a handle on `space`.
 
         Blocks until a router is reached. `prefixes` (name -> namespace IRI) are
         used in templates and sent with the changesets that use them, so the
-        space learns them too. With `identity` (`space.load_identity`), every link is
-        mutual TLS with its certificate, and writes go under its name.
+        space learns them too. With `strict`, a write some of whose triples the
+        store did not apply raises `NotApplied` (see `send`). With `identity`
+        (`space.load_identity`), every link is mutual TLS with its certificate,
+        and writes go under its name.
 
         Raises:
             InputError: `space` is not a legal space name (checked before connecting).
@@ -106,7 +113,13 @@ class TripleSpace:
         writer = identity.name if identity is not None else None
         try:
             return cls(
-                session, space, agent=agent, prefixes=prefixes, writer=writer, _owns_session=True
+                session,
+                space,
+                agent=agent,
+                prefixes=prefixes,
+                strict=strict,
+                writer=writer,
+                _owns_session=True,
             )
         except BaseException:
             session.close()
@@ -170,17 +183,24 @@ class TripleSpace:
         cs.prefixes = _used_prefixes(cs, [added, removed], self.prefixes)
         return cs
 
-    def send(self, cs: Changeset, *, timeout: float = 5.0) -> str:
-        """Send a changeset and wait until the store has made it durable; return its id.
+    def send(self, cs: Changeset, *, timeout: float = 5.0, strict: bool | None = None) -> Ack:
+        """Send a changeset and wait until the store has made it durable; return its ack.
+
+        The ack is the changeset's id (a `str`) with `seq` and `dropped`: the added
+        triples the store did not apply and why (a functional property holding a
+        newer value). Sent again while no store answers (a restart, a failover),
+        it is applied once: the store knows its id.
 
         Raises:
+            NotApplied: `strict` (default: the handle's) and some triple was not applied.
             SpaceUnavailable: no store was reachable within `timeout`.
             SpaceTimeout: a store was reached but did not acknowledge within
                 `timeout`; the changeset may still be applied.
             ChangesetRejected: the store refused it.
         """
-        ask_store(self.session, self._key("write"), cs.encode(), timeout, what="write")
-        return cs.id
+        reply = ask_store(self.session, self._key("write"), cs.encode(), timeout, what="write")
+        ack = Ack.of(cs.id, reply)
+        return ack.check() if (self.strict if strict is None else strict) else ack
 
     def send_later(self, cs: Changeset, *, timeout: float = 5.0) -> Pending:
         """Send a changeset now and read the acknowledgement later (`send`'s pipelined twin).
@@ -198,15 +218,22 @@ class TripleSpace:
         )
         return cs.id
 
-    def write(self, triples: Triples, *, timeout: float = 5.0, cause: str | None = None) -> str:
-        """Add triples as one changeset; block until durable (see `send`)."""
-        return self.send(self.changeset(triples, cause=cause), timeout=timeout)
+    def write(
+        self,
+        triples: Triples,
+        *,
+        timeout: float = 5.0,
+        cause: str | None = None,
+        strict: bool | None = None,
+    ) -> Ack:
+        """Add triples as one changeset; block until durable; return the ack (see `send`)."""
+        return self.send(self.changeset(triples, cause=cause), timeout=timeout, strict=strict)
 
     def write_nowait(self, triples: Triples, *, cause: str | None = None) -> str:
         """Add triples without waiting for the store (for high-rate sensor data)."""
         return self.send_nowait(self.changeset(triples, cause=cause))
 
-    def remove(self, triples: Triples, *, timeout: float = 5.0, cause: str | None = None) -> str:
+    def remove(self, triples: Triples, *, timeout: float = 5.0, cause: str | None = None) -> Ack:
         """Remove triples as one changeset; block until durable."""
         return self.send(self.changeset((), triples, cause=cause), timeout=timeout)
 
@@ -219,8 +246,9 @@ class TripleSpace:
         inferred_removed: Triples = (),
         cause: str | None = None,
         timeout: float = 5.0,
-    ) -> str:
-        """Apply removals then additions atomically, as one changeset; block until durable."""
+        strict: bool | None = None,
+    ) -> Ack:
+        """Apply removals then additions atomically, as one changeset; return the ack (`send`)."""
         cs = self.changeset(
             added,
             removed,
@@ -228,7 +256,7 @@ class TripleSpace:
             inferred_removed=inferred_removed,
             cause=cause,
         )
-        return self.send(cs, timeout=timeout)
+        return self.send(cs, timeout=timeout, strict=strict)
 
     @contextmanager
     def transaction(self, *, timeout: float = 5.0) -> Iterator[Transaction]:
@@ -240,6 +268,8 @@ class TripleSpace:
     # Reading
 
     def _ask(self, request: dict, timeout: float) -> dict:
+        # The store gives up a little before the caller does, so the caller hears why.
+        request["limit"] = max(0.05, timeout - max(0.1, min(1.0, timeout * 0.1)))
         return ask_store(self.session, self._key("query"), pack(request), timeout, what="query")
 
     def _template(self, template: TemplateLike) -> Template:
@@ -282,10 +312,15 @@ class TripleSpace:
         return list(dict.fromkeys(_triples(reply)))
 
     def take(self, template: TemplateLike = None, *, timeout: float = 5.0) -> Graph:
-        """Remove every matching asserted triple and return them, atomically at the store."""
+        """Remove every matching asserted triple and return them, atomically at the store.
+
+        The request carries an id: sent again while no store answers (a restart),
+        it gets the first outcome, never a second take.
+        """
         t = self._template(template)
         request = {
             "op": "take",
+            "id": uuid.uuid4().hex,
             "template": t.to_wire(),
             "agent": self.agent,
             "ts": str(self.session.new_timestamp()),
@@ -326,6 +361,7 @@ class TripleSpace:
 
         Raises:
             QueryError: the store rejected the query.
+            QueryTimeLimit: it ran past `timeout` (or the store's `--query-timeout`).
         """
         reply = self._ask({"op": "sparql", "text": text}, timeout)
         body = reply.get("body") or b""

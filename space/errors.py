@@ -43,6 +43,21 @@ class QueryError(SpaceError):
     """A SPARQL query was rejected by the store (syntax or evaluation error)."""
 
 
+class QueryTimeLimit(QueryError):
+    """A read ran past its time limit at the store (the message names it); the store lives on."""
+
+
+class NotApplied(SpaceError):
+    """A strict write was acknowledged with triples not applied (`ack.dropped` says which and why).
+
+    The rest of the changeset is applied and durable: this is not a rejection.
+    """
+
+    def __init__(self, ack: object, message: str) -> None:
+        super().__init__(message)
+        self.ack = ack
+
+
 class InputError(SpaceError, ValueError):
     """A document or name given by the user (Turtle file, template, space name) is malformed."""
 

@@ -7,7 +7,13 @@ import time
 import zenoh
 
 from space.changeset import unpack
-from space.errors import ChangesetRejected, QueryError, SpaceTimeout, SpaceUnavailable
+from space.errors import (
+    ChangesetRejected,
+    QueryError,
+    QueryTimeLimit,
+    SpaceTimeout,
+    SpaceUnavailable,
+)
 
 
 def ask_store(
@@ -24,6 +30,7 @@ def ask_store(
         SpaceTimeout: a store was reached but did not answer in time (a write
             may still be applied).
         QueryError: the store answered with an error (bad SPARQL, malformed request).
+        QueryTimeLimit: the read ran past its time limit at the store.
         ChangesetRejected: the store refused a write (`what="write"`).
     """
     deadline = time.monotonic() + timeout
@@ -79,6 +86,7 @@ def _get(session: zenoh.Session, key: str, payload: bytes, timeout: float) -> ze
 # The error reply Zenoh itself makes when a queryable was reached but did not answer in
 # time; the store's own error replies are sentences, never this one word.
 _ZENOH_TIMEOUT = "Timeout"
+TIME_LIMIT = "time limit: "  # how the store's error reply to a read past its time limit starts
 
 
 def _decode(replies: list[zenoh.Reply], key: str, timeout: float, what: str) -> dict:
@@ -91,6 +99,8 @@ def _decode(replies: list[zenoh.Reply], key: str, timeout: float, what: str) -> 
             return value
         errors.append(reply.err.payload.to_string() if reply.err is not None else "unknown error")
     refusals = [message for message in errors if message != _ZENOH_TIMEOUT]
+    if refusals and refusals[0].startswith(TIME_LIMIT):
+        raise QueryTimeLimit(refusals[0][len(TIME_LIMIT) :])
     if refusals:
         raise (ChangesetRejected if what == "write" else QueryError)(refusals[0])
     if errors:

@@ -29,6 +29,8 @@ def open_server(
     *,
     durable: bool = False,
     log_keep: int = 100_000,
+    query_timeout: float = 10.0,
+    max_spaces: int = 10_000,
     config_file: str | None = None,
     connect: list[str] | None = None,
     store: bool = True,
@@ -60,6 +62,8 @@ def open_server(
             data_dir or default_data_dir(),
             durable=durable,
             log_keep=log_keep,
+            query_timeout=query_timeout,
+            max_spaces=max_spaces,
             look_for_leader=2.0 if connect else 0.0,
             guard=guard,
         )

@@ -57,7 +57,7 @@ def test_garbage_query_gets_an_error_reply(ts):
 
 
 def test_bad_sparql_raises_query_error_naming_the_position(ts):
-    with pytest.raises(QueryError, match="line:1"):
+    with pytest.raises(QueryError, match="line 1, column 15"):
         ts.query_sparql("SELECT WHERE {")
 
 

@@ -38,7 +38,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--data", metavar="DIR", type=Path, help="where the store persists (default: user data dir)"
     )
     p.add_argument(
-        "--fsync", action="store_true", help="fsync every commit (survives power loss, slower)"
+        "--fsync",
+        action="store_true",
+        help="flush every commit to disk before acknowledging it (survives power loss, "
+        "slower; without it a commit survives kill -9 of the store, not of the machine)",
     )
     p.add_argument(
         "--log-keep",
@@ -47,6 +50,21 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=100_000,
         help="changesets of each space kept for late subscribers and returning stores "
         "(default 100000; one away longer is copied whole)",
+    )
+    p.add_argument(
+        "--query-timeout",
+        metavar="SECONDS",
+        type=float,
+        default=10.0,
+        help="time limit of a read (SPARQL, template, log); a request may ask for less "
+        "(default 10)",
+    )
+    p.add_argument(
+        "--max-spaces",
+        metavar="N",
+        type=int,
+        default=10_000,
+        help="spaces this store holds at most; a write to one more is refused (default 10000)",
     )
     p.add_argument(
         "--no-store", action="store_true", help="route only: another process keeps the space"
@@ -69,6 +87,8 @@ def run(args: argparse.Namespace) -> int:
         data_dir=args.data,
         durable=args.fsync,
         log_keep=args.log_keep,
+        query_timeout=args.query_timeout,
+        max_spaces=args.max_spaces,
         config_file=args.config,
         connect=args.connect,
         store=not args.no_store,

@@ -24,12 +24,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         "write",
         help="write a Turtle document into the space",
         description="Write the triples of a Turtle document (- for stdin) as one changeset; "
-        "with --remove, remove those of another in the same changeset. Prints the changeset id. "
+        "with --remove, remove those of another in the same changeset. Prints the changeset id; "
+        "each added triple the store did not apply (a functional property holding a newer value) "
+        "is printed on stderr with its reason, and with --strict makes the exit code 1. "
         "A document with no triples is an error (nothing is written); big documents (1 MB and "
         "more) get progress lines on stderr.",
     )
     p.add_argument("file", nargs="?", metavar="FILE|-", help="Turtle document to add")
     p.add_argument("--remove", metavar="FILE|-", help="Turtle document whose triples to remove")
+    p.add_argument("--strict", action="store_true", help="exit 1 when some triple was not applied")
     add_connect(p, space=None)
     p.set_defaults(func=run)
 
@@ -55,10 +58,14 @@ def run(args: argparse.Namespace) -> int:
         big = any(_size(source) >= PROGRESS_BYTES for source in (args.file, args.remove))
         if big:
             _say(f"sending one changeset of {len(cs.added) + len(cs.removed)} triples…")
-        print(ts.send(cs, timeout=args.timeout), file=sys.stdout)
+        ack = ts.send(cs, timeout=args.timeout, strict=False)
+        print(ack, file=sys.stdout)
         if big:
             _say("written")
-    return 0
+    for dropped in ack.dropped:
+        s, p, o = (term.n3() for term in dropped.triple)
+        print(f"tspace: not applied: {s} {p} {o} .: {dropped.reason}", file=sys.stderr)
+    return 1 if ack.dropped and args.strict else 0
 
 
 def _read(source: str) -> Graph:

@@ -32,6 +32,9 @@ class AckGate:
     def __init__(self, timeout: float = 1.0) -> None:
         self.timeout = timeout
         self.followers: set[str] = set()
+        # Stores whose token is alive: each becomes a follower (waited for) with its first
+        # confirmation, so a token alone (anyone can declare one) delays no acknowledgement.
+        self.candidates: set[str] = set()
         self._acked: dict[str, dict[str, int]] = {}
         self._held: list[_Held] = []
 
@@ -45,6 +48,9 @@ class AckGate:
 
     def acked(self, store: str, seqs: dict[str, int]) -> None:
         """Record what a follower has committed."""
+        if store not in self.candidates:
+            return
+        self.followers.add(store)
         known = self._acked.setdefault(store, {})
         for space, seq in seqs.items():
             known[space] = max(seq, known.get(space, 0))
@@ -52,6 +58,7 @@ class AckGate:
     def forget(self, store: str) -> None:
         """Stop waiting for a follower that is gone."""
         self.followers.discard(store)
+        self.candidates.discard(store)
         self._acked.pop(store, None)
 
     def release(self) -> None:

@@ -1,129 +1,307 @@
-"""The store's durable memory: one SQLite database in WAL mode.
+"""The store's durable memory: one on-disk Oxigraph database holding every space and its log.
 
-SQLite is embedded, crash-safe and on every machine. In WAL mode with
-`synchronous=NORMAL` a commit survives `kill -9` of the process (the WAL is in
-the OS page cache), which is the failure the issue asks for; `durable=True`
-(`tspace serve --fsync`) sets `synchronous=FULL` to survive power loss too.
+Layout (every IRI under `urn:tspace:`, space names being IRI-safe):
+
+- `graph:<space>:asserted`, `graph:<space>:inferred`: the space's triples; SPARQL
+  reads their union as its default graph.
+- `graph:<space>:stamps`: for each functional `(s p)` its writer's HLC timestamp,
+  as the triple `s p "<timestamp>"`, so the later-timestamp rule survives restarts.
+- `meta`: `space:<space> seq N` (the space's sequence number) and its prefixes.
+- `log:<space>`: per changeset `log:<space>:<seq>` with its `n`, the published
+  payload (base64 msgpack), the request id it answered and what its writer was
+  told was not applied.
+
+`commit` writes a batch of changesets, each with its log entry and sequence
+number, as ONE SPARQL UPDATE: Oxigraph applies an update atomically (one
+RocksDB write batch), so after `kill -9` a changeset is wholly there with its
+log entry and seq, or not at all. A commit is in RocksDB's write-ahead log,
+not fsynced: it survives the death of the process, not of the machine;
+`durable=True` (`tspace serve --fsync`) also calls `Store.flush()` before a
+commit returns.
 """
 
 from __future__ import annotations
 
-import sqlite3
+import base64
+import gc
+import logging
+import time
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
-_SCHEMA = """
-CREATE TABLE IF NOT EXISTS triples (
-    space TEXT NOT NULL, g TEXT NOT NULL, s TEXT NOT NULL, p TEXT NOT NULL, o TEXT NOT NULL,
-    ts TEXT NOT NULL DEFAULT '',
-    PRIMARY KEY (space, g, s, p, o)
-) WITHOUT ROWID;
-CREATE TABLE IF NOT EXISTS log (
-    space TEXT NOT NULL, seq INTEGER NOT NULL, payload BLOB NOT NULL,
-    PRIMARY KEY (space, seq)
-) WITHOUT ROWID;
-CREATE TABLE IF NOT EXISTS prefixes (
-    space TEXT NOT NULL, name TEXT NOT NULL, ns TEXT NOT NULL,
-    PRIMARY KEY (space, name)
-) WITHOUT ROWID;
-"""
+import pyoxigraph as ox
 
-Row = tuple[str, str, str]
+from space.errors import SpaceError
+from space.store import oxterms
+from space.store.oxterms import OxTerm, OxTriple
+
+log = logging.getLogger("tspace.store")
+
+FORMAT = "2"  # 1 was SQLite (space.sqlite3)
+_U = "urn:tspace:"
+META = ox.NamedNode(_U + "meta")
+SEQ = ox.NamedNode(_U + "seq")
+PREFIX = ox.NamedNode(_U + "prefix")
+FORMAT_P = ox.NamedNode(_U + "format")
+STORE = ox.NamedNode(_U + "store")
+N = ox.NamedNode(_U + "n")
+PAYLOAD = ox.NamedNode(_U + "payload")
+REQUEST = ox.NamedNode(_U + "request")
+DROPPED = ox.NamedNode(_U + "dropped")
+INT = ox.NamedNode("http://www.w3.org/2001/XMLSchema#integer")
+FUNCTIONAL = (
+    "http://www.w3.org/1999/02/22-rdf-syntax-ns#type",
+    "http://www.w3.org/2002/07/owl#FunctionalProperty",
+)
+
+
+class CommitFailed(SpaceError):
+    """The database could not commit (disk full, read-only directory, I/O error)."""
+
+
+class DataDirInUse(SpaceError):
+    """Another store process has the data directory open."""
+
+
+@lru_cache(maxsize=4096)
+def graph(space: str, which: str) -> ox.NamedNode:
+    """Return the IRI of a space's graph: `t` (asserted), `i` (inferred) or `stamps`."""
+    name = {"t": "asserted", "i": "inferred"}.get(which, which)
+    return ox.NamedNode(f"{_U}graph:{space}:{name}")
+
+
+def space_node(space: str) -> ox.NamedNode:
+    return ox.NamedNode(f"{_U}space:{space}")
+
+
+def _log_graph(space: str) -> ox.NamedNode:
+    return ox.NamedNode(f"{_U}log:{space}")
+
+
+def _entry(space: str, seq: int) -> ox.NamedNode:
+    return ox.NamedNode(f"{_U}log:{space}:{seq}")
 
 
 @dataclass
-class Commit:
-    """What one applied changeset does to the database."""
+class Entry:
+    """One net changeset to commit: its triples, stamps, prefixes and log entry."""
 
     space: str
     seq: int
+    request: str
     payload: bytes
-    removed: list[tuple[str, Row]] = field(default_factory=list)
-    added: list[tuple[str, Row, str]] = field(default_factory=list)
+    dropped: bytes = b""  # msgpack of what the writer was told was not applied (if anything)
+    removed: list[OxTriple] = field(default_factory=list)
+    added: list[OxTriple] = field(default_factory=list)
+    inferred_removed: list[OxTriple] = field(default_factory=list)
+    inferred_added: list[OxTriple] = field(default_factory=list)
     prefixes: dict[str, str] = field(default_factory=dict)
+    stamps_removed: list[OxTriple] = field(default_factory=list)
+    stamps_added: list[OxTriple] = field(default_factory=list)
+
+
+@dataclass
+class Loaded:
+    """What a space's state is rebuilt from when the store opens it."""
+
+    seq: int = 0
+    prefixes: dict[str, str] = field(default_factory=dict)
+    stamps: dict[tuple[OxTerm, OxTerm], str] = field(default_factory=dict)
+    functional: set[OxTerm] = field(default_factory=set)
 
 
 class StoreDB:
-    """Open (creating if needed) the database file under `data_dir`.
+    """Open (creating if needed) the Oxigraph database under `data_dir`.
 
-    Not thread-safe: one owner thread does every call.
+    Writes (`commit`, `replace`) come from one thread; reads may come from any
+    thread, each call reading one consistent snapshot.
+
+    A database that cannot be opened for writing (a read-only directory) is
+    opened read-only, with `open_error` saying why: the store then serves reads
+    and refuses writes until `probe` succeeds.
+
+    Raises:
+        DataDirInUse: another process holds the directory.
+        OldDataDir: (from `migrate`) an old SQLite directory that was not migrated.
+        OSError: the directory cannot be created or read.
     """
 
     def __init__(self, data_dir: Path, *, durable: bool = False, log_keep: int = 100_000) -> None:
+        from space.store.migrate import open_store
+
         data_dir.mkdir(parents=True, exist_ok=True)
-        self.path = data_dir / "space.sqlite3"
+        self.data_dir = data_dir
+        self.path = data_dir / "oxigraph"
+        self.durable = durable
         self.log_keep = log_keep
-        self._conn = sqlite3.connect(self.path, isolation_level=None, check_same_thread=False)
-        self._conn.execute("PRAGMA journal_mode=WAL")
-        self._conn.execute(f"PRAGMA synchronous={'FULL' if durable else 'NORMAL'}")
-        self._conn.executescript(_SCHEMA)
+        self.open_error = ""  # why the database could only be opened read-only
+        try:
+            self.store: ox.Store = open_store(data_dir, self.path)
+        except OSError as exc:
+            if not self.path.exists():
+                raise
+            self.store = ox.Store.read_only(str(self.path))
+            self.open_error = f"the database opened read-only: {exc}"
         self._commits = 0
 
     def close(self) -> None:
-        """Checkpoint and close the database."""
-        self._conn.close()
+        """Flush and let go of the database (the last reference closes it)."""
+        try:
+            self.store.flush()
+        except OSError as exc:
+            log.error("could not flush the database on close: %s", exc)
+        del self.store
 
     def spaces(self) -> list[str]:
-        """Return the names of the spaces that have any data."""
-        rows = self._conn.execute(
-            "SELECT space FROM log UNION SELECT space FROM triples UNION SELECT space FROM prefixes"
-        )
-        return [r[0] for r in rows]
+        """Return the names of the spaces that were ever written."""
+        prefix = f"{_U}space:"
+        return [
+            q.subject.value[len(prefix) :]
+            for q in self.store.quads_for_pattern(None, SEQ, None, META)
+        ]
 
-    def last_seq(self, space: str) -> int:
-        """Return the sequence number of the last changeset of a space (0 if none)."""
-        row = self._conn.execute("SELECT MAX(seq) FROM log WHERE space=?", (space,)).fetchone()
-        return int(row[0] or 0)
+    def load(self, space: str) -> Loaded:
+        """Return a space's seq, prefixes, functional stamps and functional properties."""
+        node = space_node(space)
+        loaded = Loaded()
+        for q in self.store.quads_for_pattern(node, SEQ, None, META):
+            loaded.seq = int(q.object.value)
+        for q in self.store.quads_for_pattern(node, PREFIX, None, META):
+            name, _, ns = q.object.value.partition(" ")
+            loaded.prefixes[name] = ns
+        for q in self.store.quads_for_pattern(None, None, None, graph(space, "stamps")):
+            loaded.stamps[(q.subject, q.predicate)] = q.object.value
+        loaded.functional = self.functional(space)
+        return loaded
 
-    def triples(self, space: str) -> Iterator[tuple[str, str, str, str, str]]:
-        """Yield `(g, s, p, o, ts)` of every stored triple of a space."""
-        yield from self._conn.execute("SELECT g, s, p, o, ts FROM triples WHERE space=?", (space,))
+    def functional(self, space: str) -> set[OxTerm]:
+        """Return the properties declared `owl:FunctionalProperty` in either graph of a space."""
+        p, o = (ox.NamedNode(x) for x in FUNCTIONAL)
+        return {
+            q.subject
+            for which in ("t", "i")
+            for q in self.store.quads_for_pattern(None, p, o, graph(space, which))
+        }
 
-    def prefixes(self, space: str) -> dict[str, str]:
-        """Return the prefix bindings registered in a space."""
-        rows = self._conn.execute("SELECT name, ns FROM prefixes WHERE space=?", (space,))
-        return dict(rows.fetchall())
+    def has(self, space: str, which: str, t: OxTriple) -> bool:
+        """Return whether a graph (`t` or `i`) of a space holds a triple."""
+        return ox.Quad(t[0], t[1], t[2], graph(space, which)) in self.store
+
+    def objects(self, space: str, s: OxTerm, p: OxTerm) -> list[OxTerm]:
+        """Return the asserted objects of `(s p ?)` in a space."""
+        return [q.object for q in self.store.quads_for_pattern(s, p, None, graph(space, "t"))]
+
+    def match(
+        self, space: str, which: str, pattern: tuple[OxTerm | None, ...]
+    ) -> Iterator[OxTriple]:
+        """Yield the triples of a graph (`t` or `i`) matching a pattern (None: any)."""
+        for q in self.store.quads_for_pattern(*pattern, graph(space, which)):
+            yield q.subject, q.predicate, q.object
+
+    def commit(self, entries: list[Entry]) -> None:
+        """Write a batch of changesets with their log entries and seqs, atomically.
+
+        Raises:
+            CommitFailed: nothing of the batch was written.
+        """
+        if not entries:
+            return
+        text = " ;\n".join(op for e in entries for op in _operations(e))
+        try:
+            self.store.update(text)
+            if self.durable:
+                self.store.flush()
+        except (OSError, RuntimeError) as exc:
+            raise CommitFailed(f"the database could not commit: {exc}") from exc
+        self._commits += len(entries)
+        if self._commits >= 1000:
+            self._commits = 0
+            self._compact({e.space: e.seq for e in entries})
+
+    def probe(self) -> None:
+        """Reopen the database and commit one small change: does it commit again?
+
+        After a failed write RocksDB refuses every later one until reopened, so
+        the store is reopened here. Call it only while no read is running (the
+        old store must be let go of before the directory can be opened again).
+        If it cannot be opened for writing, it is opened read-only meanwhile, so
+        reads go on serving what is on disk.
+
+        Raises:
+            CommitFailed: it does not commit yet.
+        """
+        from space.store.migrate import open_store
+
+        self.store = None  # type: ignore[assignment]
+        gc.collect()
+        p, m, st = f"{_U}probe", META.value, STORE.value
+        try:
+            self.store = open_store(self.data_dir, self.path)
+            self.store.update(
+                f"DELETE WHERE {{ GRAPH <{m}> {{ <{st}> <{p}> ?x }} }} ;\n"
+                f'INSERT DATA {{ GRAPH <{m}> {{ <{st}> <{p}> "{time.time()}" }} }}'
+            )
+            self.store.flush()
+        except (OSError, RuntimeError, SpaceError) as exc:
+            if self.store is None:
+                self.store = ox.Store.read_only(str(self.path))
+            raise CommitFailed(f"the database could not commit: {exc}") from exc
+
+    def _compact(self, last: dict[str, int]) -> None:
+        """Forget log entries older than the `log_keep` latest (their request ids with them)."""
+        for space, seq in last.items():
+            if seq <= self.log_keep:
+                continue
+            g = _log_graph(space).value
+            try:
+                self.store.update(
+                    f"DELETE {{ GRAPH <{g}> {{ ?e ?p ?o }} }} WHERE {{ GRAPH <{g}> "
+                    f"{{ ?e <{N.value}> ?n . FILTER(?n <= {seq - self.log_keep}) ?e ?p ?o }} }}"
+                )
+            except OSError as exc:  # the log is only longer than it should be; say so
+                log.error("could not compact the log of %s: %s", space, exc)
 
     def log(self, space: str, first: int, last: int) -> list[tuple[int, bytes]]:
         """Return the logged changesets `first..last` (inclusive) still kept."""
-        rows = self._conn.execute(
-            "SELECT seq, payload FROM log WHERE space=? AND seq BETWEEN ? AND ? ORDER BY seq",
-            (space, first, last),
-        )
-        return rows.fetchall()
+        rows = []
+        g = _log_graph(space)
+        for seq in range(max(first, 1), last + 1):
+            for q in self.store.quads_for_pattern(_entry(space, seq), PAYLOAD, None, g):
+                rows.append((seq, base64.b64decode(q.object.value)))
+        return rows
 
-    def commit(self, commits: Iterable[Commit]) -> None:
-        """Write a batch of applied changesets in one transaction."""
-        cur = self._conn.cursor()
-        cur.execute("BEGIN")
-        try:
-            for c in commits:
-                cur.executemany(
-                    "DELETE FROM triples WHERE space=? AND g=? AND s=? AND p=? AND o=?",
-                    [(c.space, g, *row) for g, row in c.removed],
-                )
-                cur.executemany(
-                    "INSERT OR REPLACE INTO triples (space, g, s, p, o, ts) VALUES (?,?,?,?,?,?)",
-                    [(c.space, g, *row, ts) for g, row, ts in c.added],
-                )
-                cur.executemany(
-                    "INSERT OR IGNORE INTO prefixes (space, name, ns) VALUES (?,?,?)",
-                    [(c.space, n, ns) for n, ns in c.prefixes.items()],
-                )
-                cur.execute(
-                    "INSERT INTO log (space, seq, payload) VALUES (?,?,?)",
-                    (c.space, c.seq, c.payload),
-                )
-                self._commits += 1
-                if self._commits % 1000 == 0:
-                    cur.execute(
-                        "DELETE FROM log WHERE space=? AND seq<=?", (c.space, c.seq - self.log_keep)
-                    )
-            cur.execute("COMMIT")
-        except BaseException:
-            cur.execute("ROLLBACK")
-            raise
+    def outcome(self, space: str, request: str) -> tuple[int, bytes, bytes] | None:
+        """Return `(seq, payload, dropped)` of the changeset that answered a request id, if logged.
+
+        `dropped` is the msgpack list the writer was told was not applied (b"" if none).
+        """
+        g = _log_graph(space)
+        for q in self.store.quads_for_pattern(None, REQUEST, ox.Literal(request), g):
+            seq = int(q.subject.value.rsplit(":", 1)[1])
+            rows = self.log(space, seq, seq)
+            if rows:
+                dropped = b""
+                for d in self.store.quads_for_pattern(q.subject, DROPPED, None, g):
+                    dropped = base64.b64decode(d.object.value)
+                return seq, rows[0][1], dropped
+        return None
+
+    def triples(self, space: str) -> Iterator[tuple[str, str, str, str, str]]:
+        """Yield `(g, s, p, o, ts)` of every triple of a space, N-Triples texts."""
+        stamps = {
+            (q.subject, q.predicate): q.object.value
+            for q in self.store.quads_for_pattern(None, None, None, graph(space, "stamps"))
+        }
+        for which in ("t", "i"):
+            for s, p, o in self.match(space, which, (None, None, None)):
+                ts = stamps.get((s, p), "") if which == "t" else ""
+                yield which, oxterms.text(s), oxterms.text(p), oxterms.text(o), ts
+
+    def prefixes(self, space: str) -> dict[str, str]:
+        """Return the prefix bindings registered in a space."""
+        return self.load(space).prefixes
 
     def replace(
         self,
@@ -132,27 +310,76 @@ class StoreDB:
         prefixes: dict[str, str],
         last: tuple[int, bytes],
     ) -> None:
-        """Make a space a copy of another store's, in one transaction.
+        """Make a space a copy of another store's, in one update.
 
         `rows` are `(g, s, p, o, ts)` as `triples()` gives them; `last` is the
-        `(seq, payload)` of the copy's last changeset, kept as the only log entry
-        so that `last_seq()` and later changes continue from it.
+        `(seq, payload)` of the copy's last changeset, kept as its only log entry.
+
+        Raises:
+            CommitFailed: nothing was written.
         """
-        cur = self._conn.cursor()
-        cur.execute("BEGIN")
+        entry = Entry(space=space, seq=last[0], request="", payload=last[1], prefixes=prefixes)
+        for g, s, p, o, ts in rows:
+            t = (oxterms.term(s), oxterms.term(p), oxterms.term(o))
+            (entry.added if g == "t" else entry.inferred_added).append(t)
+            if ts:
+                entry.stamps_added.append((t[0], t[1], ox.Literal(ts)))
+        clear = [
+            f"DROP SILENT GRAPH <{g.value}>"
+            for g in (*(graph(space, w) for w in ("t", "i", "stamps")), _log_graph(space))
+        ]
+        node = space_node(space).value
+        clear.append(f"DELETE WHERE {{ GRAPH <{META.value}> {{ <{node}> ?p ?o }} }}")
         try:
-            for table in ("triples", "log", "prefixes"):
-                cur.execute(f"DELETE FROM {table} WHERE space=?", (space,))
-            cur.executemany(
-                "INSERT INTO triples (space, g, s, p, o, ts) VALUES (?,?,?,?,?,?)",
-                [(space, *row) for row in rows],
-            )
-            cur.executemany(
-                "INSERT INTO prefixes (space, name, ns) VALUES (?,?,?)",
-                [(space, n, ns) for n, ns in prefixes.items()],
-            )
-            cur.execute("INSERT INTO log (space, seq, payload) VALUES (?,?,?)", (space, *last))
-            cur.execute("COMMIT")
-        except BaseException:
-            cur.execute("ROLLBACK")
-            raise
+            self.store.update(" ;\n".join([*clear, *_operations(entry, fresh=True)]))
+            self.store.flush()
+        except (OSError, RuntimeError) as exc:
+            raise CommitFailed(f"the database could not commit: {exc}") from exc
+
+
+def log_quads(
+    space: str, seq: int, request: str, payload: bytes, dropped: bytes = b""
+) -> list[ox.Quad]:
+    """Return the quads of one log entry: its seq, payload, request id and what was dropped."""
+    entry, g = _entry(space, seq), _log_graph(space)
+    quads = [
+        ox.Quad(entry, N, ox.Literal(str(seq), datatype=INT), g),
+        ox.Quad(entry, PAYLOAD, ox.Literal(base64.b64encode(payload).decode("ascii")), g),
+    ]
+    if request:
+        quads.append(ox.Quad(entry, REQUEST, ox.Literal(request), g))
+    if dropped:
+        quads.append(ox.Quad(entry, DROPPED, ox.Literal(base64.b64encode(dropped).decode()), g))
+    return quads
+
+
+def _block(g: ox.NamedNode, triples: Iterable[OxTriple]) -> str:
+    body = " .\n".join(f"{s} {p} {o}" for s, p, o in triples)
+    return f"GRAPH <{g.value}> {{ {body} }}" if body else ""
+
+
+def _operations(e: Entry, *, fresh: bool = False) -> list[str]:
+    """Return the DELETE DATA and INSERT DATA of one entry (removals first, as in a changeset)."""
+    node = space_node(e.space)
+    deletes = [
+        _block(graph(e.space, "t"), e.removed),
+        _block(graph(e.space, "i"), e.inferred_removed),
+        _block(graph(e.space, "stamps"), e.stamps_removed),
+    ]
+    if e.seq > 1 and not fresh:
+        deletes.append(_block(META, [(node, SEQ, ox.Literal(str(e.seq - 1), datatype=INT))]))
+    meta = [(node, SEQ, ox.Literal(str(e.seq), datatype=INT))]
+    meta += [(node, PREFIX, ox.Literal(f"{n} {ns}")) for n, ns in e.prefixes.items()]
+    logged = [q.triple for q in log_quads(e.space, e.seq, e.request, e.payload, e.dropped)]
+    inserts = [
+        _block(graph(e.space, "t"), e.added),
+        _block(graph(e.space, "i"), e.inferred_added),
+        _block(graph(e.space, "stamps"), e.stamps_added),
+        _block(META, meta),
+        _block(_log_graph(e.space), logged),
+    ]
+    ops = []
+    if any(deletes):
+        ops.append("DELETE DATA { " + " ".join(d for d in deletes if d) + " }")
+    ops.append("INSERT DATA { " + " ".join(i for i in inserts if i) + " }")
+    return ops

@@ -18,15 +18,23 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from rdflib import OWL, RDFS, Graph
-from rdflib.term import Node
+import pyoxigraph as ox
+from rdflib import OWL, RDFS
 
-from space import keys
 from space._policy import Policy, Role
-from space.changeset import Changeset
-from space.store.state import SpaceState
+from space.errors import QueryError
+from space.store import oxterms
+from space.store.intake import WriteRequest
+from space.store.oxterms import OxTerm, OxTriple
 
 _SCHEMA = (str(OWL), str(RDFS))  # the ontology's own words, not a robot's to use
+
+Holds = Callable[[OxTriple], bool]  # whether the space's asserted graph holds a triple now
+Compact = Callable[[str], str | None]  # an IRI as `pfx:local`, or None
+
+
+class Refused(QueryError):
+    """The policy does not let this identity write (or take) these triples."""
 
 
 def writer_of(key: str) -> str | None:
@@ -36,18 +44,35 @@ def writer_of(key: str) -> str | None:
 
 
 class WriteGuard:
-    """Check changesets against a policy; used by the store's worker thread only."""
+    """Check writes and takes against a policy; used by the store's writer thread only."""
 
     def __init__(self, policy: Policy) -> None:
         self.policy = policy
+        # The policy's IRIs as the database's terms, converted once.
+        self._robot_of = {n: ox.NamedNode(str(r)) for n, r in policy.robot_of.items()}
+        self._predicates = {
+            n: frozenset(ox.NamedNode(str(p)) for p in ps) for n, ps in policy.predicates.items()
+        }
+        self._links = tuple(ox.NamedNode(str(p)) for p in policy.links)
+        self._backlinks = tuple(ox.NamedNode(str(p)) for p in policy.backlinks)
+        self._makeup = frozenset((*self._links, *self._backlinks))
 
     def refusal(
-        self, writer: str | None, state: SpaceState, cs: Changeset, *, take: bool = False
+        self,
+        writer: str | None,
+        req: WriteRequest,
+        holds: Holds,
+        compact: Compact,
+        *,
+        take: bool = False,
     ) -> str | None:
-        """Return why `writer` may not apply `cs` to `state`, or None if it may.
+        """Return why `writer` may not apply `req` to the space, or None if it may.
 
-        `writer` None is the bare key, which the routers leave to servers and
-        operators; a take on the bare `@/query` (open to every reader) is refused.
+        `holds` says what the space's asserted graph holds before `req` (a robot's
+        things are read from there, never from the write itself); `compact` names
+        IRIs in the refusal. `writer` None is the bare key, which the routers leave
+        to servers and operators; a take on the bare `@/query` (open to every
+        reader) is refused.
         """
         if writer is None:
             return "refused: a take must name its taker (@/query/<CN>)" if take else None
@@ -56,38 +81,40 @@ class WriteGuard:
             return f"refused {writer}: not in the policy, or revoked"
         if role in (Role.SERVER, Role.OPERATOR, Role.REASONER):
             return None
-        if cs.inferred_added or cs.inferred_removed:
+        if req.inferred_added or req.inferred_removed:
             return f"refused {writer}: only reasoners write inferred triples"
-        show = state.prefixes.compact
-        changed = [*cs.removed, *cs.added]
+        changed = [*req.removed, *req.added]
         if role is Role.WRITER:
-            allowed = self.policy.predicates.get(writer, frozenset())
+            allowed = self._predicates.get(writer, frozenset())
             for s, p, _o in changed:
                 if p not in allowed:
-                    return f"refused {writer}: may not write {_name(p, show)} (of {_name(s, show)})"
+                    return (
+                        f"refused {writer}: may not write {_name(p, compact)} "
+                        f"(of {_name(s, compact)})"
+                    )
             return None
-        robot = self.policy.robot_of[writer]  # a robot agent's, or a robot router's own
-        makeup = {*self.policy.links, *self.policy.backlinks}
-        for _s, p, _o in cs.added:
-            if p in makeup or str(p).startswith(_SCHEMA):
-                return f"refused {writer}: may not add {_name(p, show)} (an operator's to write)"
-        asserted = state.graphs[keys.ASSERTED]
+        robot = self._robot_of[writer]  # a robot agent's, or a robot router's own
+        for _s, p, _o in req.added:
+            if p in self._makeup or (isinstance(p, ox.NamedNode) and p.value.startswith(_SCHEMA)):
+                return f"refused {writer}: may not add {_name(p, compact)} (an operator's to write)"
         for s, p, _o in changed:
-            if not self._owns(robot, s, asserted):
+            if not self._owns(robot, s, holds):
                 return (
-                    f"refused {writer}: may not write {_name(s, show)} {_name(p, show)}, "
-                    f"not a thing of {_name(robot, show)}"
+                    f"refused {writer}: may not write {_name(s, compact)} {_name(p, compact)}, "
+                    f"not a thing of {_name(robot, compact)}"
                 )
         return None
 
-    def _owns(self, robot: Node, subject: Node, asserted: Graph) -> bool:
+    def _owns(self, robot: OxTerm, subject: OxTerm, holds: Holds) -> bool:
         """Say whether `subject` is `robot`, linked from it, or links to it, in the space."""
         if subject == robot:
             return True
-        if any((robot, link, subject) in asserted for link in self.policy.links):
+        if any(holds((robot, link, subject)) for link in self._links):
             return True
-        return any((subject, b, robot) in asserted for b in self.policy.backlinks)
+        return any(holds((subject, b, robot)) for b in self._backlinks)
 
 
-def _name(term: Node, compact: Callable[[str], str | None]) -> str:
-    return compact(str(term)) or f"<{term}>"
+def _name(term: OxTerm, compact: Compact) -> str:
+    if isinstance(term, ox.NamedNode) and not term.value.startswith(oxterms.SKOLEM):
+        return compact(term.value) or f"<{term.value}>"
+    return oxterms.text(term)

@@ -26,7 +26,7 @@ from space import keys
 from space.changeset import Changeset, pack
 from space.errors import MalformedPayload, SpaceError
 from space.request import ask_store
-from space.store.db import StoreDB
+from space.store.db import CommitFailed, StoreDB
 from space.store.state import SpaceState
 
 log = logging.getLogger("tspace.store")
@@ -143,16 +143,28 @@ class Replica:
             return True  # the leader holds nothing of it
         rows = [tuple(str(x) for x in row) for row in reply["rows"]]
         prefixes = {str(k): str(v) for k, v in reply["prefixes"].items()}
-        self.db.replace(name, rows, prefixes, (seq, last))  # type: ignore[arg-type]
+        try:
+            self.db.replace(name, rows, prefixes, (seq, last))  # type: ignore[arg-type]
+        except CommitFailed as exc:
+            log.error("could not store the copy of %s: %s", name, exc)
+            return False
         self.forget(name)  # the next use loads it from the database
         log.warning("space %s copied whole from the leader (seq %d, %d rows)", name, seq, len(rows))
         return True
 
     def _install(self, state: SpaceState, payloads: list[bytes]) -> None:
-        commits = []
+        """Commit the leader's changesets that continue this store's copy, in one update.
+
+        A failed commit leaves this copy as the database has it (the state is reloaded).
+        """
+        entries = []
         for payload in payloads:
-            net = Changeset.decode(payload)
-            if net.seq == state.seq + 1:
-                commits.append(state.install(net, payload))
-        if commits:
-            self.db.commit(commits)
+            if Changeset.decode(payload, published=True).seq == state.seq + 1:
+                entries.append(state.install(payload).entry)
+        try:
+            self.db.commit(entries)
+        except CommitFailed as exc:
+            log.error("could not install the leader's changes to %s: %s", state.name, exc)
+            self.forget(state.name)
+            return
+        state.settle()

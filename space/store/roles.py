@@ -126,14 +126,17 @@ class Roles:
         if what == "store":
             if alive:
                 self._stores.add(zid)
-                if self.role == "leading" and zid != self.zid:
-                    self._acks.followers.add(zid)
+                if zid != self.zid:
+                    self._acks.candidates.add(zid)  # waited for once it confirms a change
             else:
                 self._stores.discard(zid)
                 self._acks.forget(zid)
             return
         if alive and zid != self.zid:
             if self.role == "leading" and zid < self.zid:
+                if not self._is_store(zid):
+                    log.warning("ignoring a leader token %s that no store answers for", zid)
+                    return
                 log.warning("store %s also leads; %s steps down", zid, self.zid)
                 self._follow(zid)
             elif self.role == "following":
@@ -148,6 +151,15 @@ class Roles:
                 log.warning("leader %s is gone; store %s takes over", zid, self.zid)
                 self._lead()
 
+    def _is_store(self, zid: str) -> bool:
+        """Return whether the session `zid` answers as a store (a token alone proves nothing).
+
+        Blocks up to a second. Anyone may declare a liveliness token on
+        `@leader/...`; only a store's own session answers `@repl/spaces`.
+        """
+        replies = self.session.get(f"{self.root}/@repl/spaces", timeout=1.0)
+        return any(r.ok is not None and str(r.replier_id) == zid for r in replies)
+
     def _declare(self, entities: list) -> None:
         for entity in reversed(self._entities):
             entity.undeclare()
@@ -159,7 +171,8 @@ class Roles:
         self._declare(entities)
         self.role, self.leader = "leading", self.zid
         self._behind_until = None
-        self._acks.followers = self._stores - {self.zid}
+        self._acks.followers = set()
+        self._acks.candidates = self._stores - {self.zid}
         self._announce()
         self.ready.set()
         log.info("store %s leads", self.zid)

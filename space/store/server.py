@@ -1,9 +1,11 @@
-"""The store process's Zenoh side: one worker thread serving every space.
+"""The store process's Zenoh side: one writer thread for every space, reads beside it.
 
-Zenoh callbacks only enqueue; one worker thread owns the state and the
-database, so changesets are applied in one order, acknowledged only once
-committed (and, with replicas, once every follower has them), and published
-after, as whole changesets and as per-triple keys.
+Zenoh callbacks only enqueue. The writer thread takes requests in arrival
+order: writes and takes are decided (`state.py`), committed as one batch
+with their log entries (`db.py`), acknowledged only once committed (and, with
+replicas, once every follower has them), then published. A read is handed, in
+its turn, to a reader thread (`readers.py`): it sees every write acknowledged
+before it was sent, and a slow one never holds up the writer.
 
 Several stores may hold the same spaces: `roles.py` decides which one leads
 (and serves them) and which follow; this module says what each role declares.
@@ -17,37 +19,29 @@ import queue
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
 import zenoh
 
 from space import keys
-from space.changeset import Changeset, pack, unpack
+from space.changeset import pack, unpack
 from space.errors import MalformedPayload, QueryError, SpaceError
+from space.store import intake, queries
 from space.store.acks import AckGate
-from space.store.db import Commit, StoreDB
+from space.store.db import StoreDB
 from space.store.guard import WriteGuard, writer_of
-from space.store.queries import answer_key_get, answer_query
+from space.store.publish import Publisher
+from space.store.readers import Readers
 from space.store.replica import Replica
 from space.store.roles import Roles
 from space.store.state import SpaceState
+from space.store.writer import Pending, Request, Writer, answer, reject
 
 log = logging.getLogger("tspace.store")
 
 _BATCH = 256
 HEARTBEAT = 0.5  # seconds between publications of each space's sequence number
-_SERVICES = ("write", "query", "log", "keys")
-
-
-@dataclass
-class _Request:
-    kind: str  # a service, or "replica", "ack", "peer", "spaces", "state"
-    space: str
-    payload: bytes | None
-    query: zenoh.Query | None = None
-    key: str = ""
-    writer: str | None = None  # the CN a secure router let write on this key
+_READS = ("query", "log", "keys")
 
 
 class StoreServer:
@@ -66,6 +60,9 @@ class StoreServer:
         log_keep: int = 100_000,
         root: str = keys.ROOT,
         look_for_leader: float = 0.0,
+        query_timeout: float = 10.0,
+        query_slots: int = 16,
+        max_spaces: int = 10_000,
         guard: WriteGuard | None = None,
     ) -> None:
         self.session = session
@@ -74,7 +71,8 @@ class StoreServer:
         self.data_dir = data_dir
         self.durable = durable
         self.root = root
-        self._queue: queue.SimpleQueue[_Request | None] = queue.SimpleQueue()
+        self.max_spaces = max_spaces
+        self._queue: queue.SimpleQueue[Request | None] = queue.SimpleQueue()
         self._spaces: dict[str, SpaceState] = {}
         self._acks = AckGate()
         self._roles = Roles(
@@ -86,17 +84,35 @@ class StoreServer:
             following=self._serve_following,
             seqs=self._seqs,
         )
-        self._graph_publishers: dict[tuple[str, str], zenoh.Publisher] = {}
+        self._readers = Readers(limit=query_timeout, slots=query_slots)
+        self._publisher = Publisher(session, root)
         self._db: StoreDB | None = None
         self._worker: threading.Thread | None = None
+        self._writer: Writer | None = None
 
     def start(self, timeout: float = 10.0) -> None:
-        """Load every space from the database, find the leader or lead, then serve.
+        """Open the database, find the leader or lead, then serve.
 
         Blocks until this store leads or has caught up with the leader, or for
         `timeout` seconds (a follower behind goes on trying in the background).
+
+        Raises:
+            DataDirInUse: another store has the data directory open.
+            OldDataDir: an old data directory could not be migrated.
         """
         self._db = StoreDB(self.data_dir, durable=self.durable, log_keep=self.log_keep)
+        if self._db.open_error:
+            log.error("%s: serving reads, refusing writes until it commits", self._db.open_error)
+        self._writer = Writer(
+            self.session,
+            self._db,
+            spaces=self._spaces,
+            space=self._space,
+            acks=self._acks,
+            publisher=self._publisher,
+            max_spaces=self.max_spaces,
+            guard=self.guard,
+        )
         replica = Replica(self.session, self.root, self._db, self._space, self._forget)
         for name in self._db.spaces():
             self._space(name)
@@ -120,9 +136,8 @@ class StoreServer:
             self._queue.put(None)
             self._worker.join()
             self._worker = None
-        for publisher in self._graph_publishers.values():
-            publisher.undeclare()
-        self._graph_publishers = {}
+        self._readers.close()
+        self._publisher.close()
         if self._db is not None:
             self._db.close()
             self._db = None
@@ -134,7 +149,7 @@ class StoreServer:
             key = str(query.key_expr)
             space = key.split("/")[1]
             payload = query.payload.to_bytes() if query.payload is not None else None
-            self._queue.put(_Request(kind, space, payload, query, key, writer_of(key)))
+            self._queue.put(Request(kind, space, payload, query, key, writer_of(key)))
 
         return callback
 
@@ -143,7 +158,7 @@ class StoreServer:
             key = str(sample.key_expr)
             space = key.split("/")[1]
             payload = sample.payload.to_bytes()
-            self._queue.put(_Request(kind, space, payload, key=key, writer=writer_of(key)))
+            self._queue.put(Request(kind, space, payload, key=key, writer=writer_of(key)))
 
         return callback
 
@@ -151,11 +166,11 @@ class StoreServer:
         def callback(sample: zenoh.Sample) -> None:
             zid = str(sample.key_expr).rsplit("/", 1)[1]
             alive = sample.kind == zenoh.SampleKind.PUT
-            self._queue.put(_Request("peer", what, pack([zid, alive])))
+            self._queue.put(Request("peer", what, pack([zid, alive])))
 
         return callback
 
-    # The worker: the only thread that touches state and database.
+    # The writer: the only thread that decides and commits.
 
     def _run(self) -> None:
         self._roles.decide()
@@ -164,14 +179,15 @@ class StoreServer:
             self._roles.retry()
             if time.monotonic() >= next_beat:
                 self._heartbeat()
+                self._writer.probe(self._readers.running)
                 next_beat = time.monotonic() + HEARTBEAT
-            batch: list[_Request] = []
+            batch: list[Request] = []
             wait = next_beat - time.monotonic()
             held = self._acks.wait_time()
             try:
                 item = self._queue.get(timeout=max(0.0, wait if held is None else min(wait, held)))
             except queue.Empty:
-                item = _Request("tick", "", None)
+                item = Request("tick", "", None)
             while item is not None:
                 batch.append(item)
                 if len(batch) >= _BATCH:
@@ -180,97 +196,38 @@ class StoreServer:
                     item = self._queue.get_nowait()
                 except queue.Empty:
                     break
-            try:
-                self._handle(batch)
-                self._acks.release()
-            except Exception:  # a bug must not stop the store; the requests time out
-                log.exception("store worker failed on a batch of %d request(s)", len(batch))
+            self._handle(batch)
+            self._acks.release()
             if item is None:
                 return
 
-    def _handle(self, batch: list[_Request]) -> None:
-        pending: list[tuple[_Request, Changeset | None, SpaceState]] = []
-        commits: list[Commit] = []
-        replicas: list[_Request] = []
+    def _handle(self, batch: list[Request]) -> None:
+        pending: list[Pending] = []
+        replicas: list[Request] = []
         for req in batch:
             if req.kind == "replica":
                 replicas.append(req)
                 continue
-            if req.kind != "write":
-                self._flush(pending, commits)
-                pending, commits = [], []
-                self._other(req)
-                continue
             try:
-                keys.check_space(req.space)
-                cs = Changeset.decode(req.payload or b"")
-            except (MalformedPayload, ValueError) as exc:
-                self._reject(req, exc)
-                continue
-            state = self._space(req.space)
-            if self.guard is not None and (why := self.guard.refusal(req.writer, state, cs)):
-                self._reject(req, QueryError(why))
-                continue
-            if not cs.timestamp:
-                cs.timestamp = str(self.session.new_timestamp())
-            result = state.apply(cs)
-            pending.append((req, result[0] if result else None, state))
-            if result is not None:
-                commits.append(result[1])
-        self._flush(pending, commits)
+                if req.kind == "write":
+                    self._writer.write(req, pending)
+                    continue
+                self._writer.commit(pending)
+                pending = []
+                if req.kind == "query" and _op(req.payload) == "take":
+                    self._writer.take(req, pending)
+                    self._writer.commit(pending)
+                    pending = []
+                else:
+                    self._other(req)
+            except (SpaceError, ValueError) as exc:
+                reject(req, exc)
+            except Exception as exc:  # a bug must not stop the store nor leave a caller waiting
+                log.exception("store failed on a %s request for %r", req.kind, req.space)
+                reject(req, QueryError(f"internal error: {type(exc).__name__}: {exc}"))
+        self._writer.commit(pending)
         if replicas:
             self._roles.follow([(r.space, r.payload or b"") for r in replicas])
-
-    def _flush(self, pending: list, commits: list[Commit]) -> None:
-        if not pending:
-            return
-        assert self._db is not None
-        self._db.commit(commits)
-        for req, net, state in pending:
-            if req.query is not None:
-                seq = net.seq if net else state.seq
-                ack = pack({"id": net.id if net else "", "seq": seq})
-                if not self._acks.hold(state.name, seq, req.query, req.key, ack):
-                    req.query.reply(req.key, ack)
-                    req.query.drop()
-        published = [(net, state) for _req, net, state in pending if net is not None]
-        block = zenoh.CongestionControl.BLOCK
-        # The whole changesets first (every agent waits for them), then their triples' keys.
-        for (_net, state), commit in zip(published, commits, strict=True):
-            key = keys.service_key(state.name, "changes", self.root)
-            self.session.put(key, commit.payload, congestion_control=block)
-        for net, state in published:
-            self._publish_triples(state, net)
-
-    def _publish_triples(self, state: SpaceState, net: Changeset) -> None:
-        """Publish each triple of a net changeset on its key, for plain Zenoh subscribers.
-
-        A graph nobody subscribes to is skipped without making its keys (Zenoh
-        would drop the samples anyway): a 600-triple answer then costs nothing here.
-        """
-        s = self.session
-        block = zenoh.CongestionControl.BLOCK
-        meta = pack({"id": net.id, "seq": net.seq})
-        for graph, removed, added in (
-            (keys.ASSERTED, net.removed, net.added),
-            (keys.INFERRED, net.inferred_removed, net.inferred_added),
-        ):
-            if not (removed or added) or not self._watched(state.name, graph):
-                continue
-            for t in removed:
-                key = keys.triple_key(state.name, graph, t, state.prefixes, self.root)
-                s.delete(key, attachment=meta, congestion_control=block)
-            for t in added:
-                key = keys.triple_key(state.name, graph, t, state.prefixes, self.root)
-                s.put(key, meta, congestion_control=block)
-
-    def _watched(self, space: str, graph: str) -> bool:
-        """Return whether any subscriber matches a graph's triple keys (Zenoh's matching status)."""
-        publisher = self._graph_publishers.get((space, graph))
-        if publisher is None:
-            key = f"{self.root}/{space}/{graph}/**"
-            publisher = self._graph_publishers[(space, graph)] = self.session.declare_publisher(key)
-        return publisher.matching_status.matching
 
     def _heartbeat(self) -> None:
         """Publish each space's sequence number, so subscribers learn of changes they missed."""
@@ -280,96 +237,81 @@ class StoreServer:
             if state.seq:
                 self.session.put(keys.service_key(name, "seq", self.root), pack({"seq": state.seq}))
 
-    def _other(self, req: _Request) -> None:
+    def _other(self, req: Request) -> None:
         if req.kind == "peer":
             self._roles.peer(req.space, *unpack(req.payload or b""))  # type: ignore[misc]
         elif req.kind == "ack":
             self._ack(req.payload or b"")
         elif req.kind == "spaces":
-            reply = pack(self._seqs())
-            self._answer(req, lambda: reply)
+            answer(req, self._seqs())
         elif req.kind == "state":
-            self._answer(req, lambda: self._copy(unpack(req.payload or b"")))
-        elif req.kind in _SERVICES:
-            self._answer(req, lambda: self._service(req))
+            answer(req, self._copy(unpack(req.payload or b"")))
+        elif req.kind in _READS:
+            self._read(req)
 
-    def _service(self, req: _Request) -> bytes:
-        keys.check_space(req.space)
-        state = self._space(req.space)
+    def _read(self, req: Request) -> None:
+        """Hand a read to a reader thread: it starts after every write queued before it."""
+        assert req.query is not None
+        db, root = self._db_(), self.root
         if req.kind == "keys":
-            assert req.query is not None
-            answer_key_get(state, req.query, self.root)
-            return b""
-        if req.kind == "log":
-            return self._log(state, unpack(req.payload or b""))
-        reply, take = answer_query(state, unpack(req.payload or b""))
-        if take is not None and not take.is_empty():
-            if self.guard is not None and (
-                why := self.guard.refusal(req.writer, state, take, take=True)
-            ):
-                raise QueryError(why)
-            result = state.apply(take)
-            if result is not None:
-                self._flush([(_Request("write", req.space, None), result[0], state)], [result[1]])
-                reply["seq"] = result[0].seq
-        return pack(reply)
-
-    def _answer(self, req: _Request, produce: Callable[[], bytes]) -> None:
-        try:
-            payload = produce()
-            if payload and req.query is not None:
-                req.query.reply(req.key, payload)
-        except (SpaceError, ValueError) as exc:
-            self._reject(req, exc)
+            spaces = self._key_spaces(req.key)
+            self._readers.submit(
+                req.query, req.key, lambda _d: queries.key_get(db, spaces, req.query, root)
+            )
             return
-        if req.query is not None:
-            req.query.drop()
+        space = keys.check_space(req.space)
+        if req.kind == "log":
+            first, last = intake.log_request(req.payload or b"", 2**62)
+            self._readers.submit(
+                req.query, req.key, lambda _d: queries.log_entries(db, space, first, last)
+            )
+            return
+        read = intake.query_request(req.payload or b"")
+        if read.op == "sparql":
+            job = lambda d: queries.sparql(db, space, read.text, d)  # noqa: E731
+        else:
+            job = lambda d: queries.read(db, space, read, d)  # noqa: E731
+        self._readers.submit(req.query, req.key, job, read.limit)
 
-    def _log(self, state: SpaceState, request: object) -> bytes:
-        if not isinstance(request, dict):
-            raise MalformedPayload("a log request is a map {from, to}")
-        first, last = int(request.get("from", 1)), int(request.get("to", state.seq))
-        assert self._db is not None
-        rows = self._db.log(state.name, first, last)
-        return pack({"seq": state.seq, "changes": [payload for _seq, payload in rows]})
+    def _key_spaces(self, key: str) -> list[str]:
+        """Return the known spaces a GET on triple keys may name (none is created)."""
+        chunk = key.split("/")[1]
+        if "*" not in chunk and "$" not in chunk:
+            return [keys.check_space(chunk)]  # read from the database as it is: nothing created
+        selector = zenoh.KeyExpr(key)
+        return [
+            n for n in self._spaces if selector.intersects(zenoh.KeyExpr(f"{self.root}/{n}/**"))
+        ]
 
-    def _copy(self, request: object) -> bytes:
+    def _copy(self, request: object) -> dict:
         """Return a space whole, for a follower whose own copy cannot be continued."""
         if not isinstance(request, dict) or not isinstance(request.get("space"), str):
             raise MalformedPayload("a state request is a map {space}")
-        state = self._space(request["space"])
-        assert self._db is not None
-        last = self._db.log(state.name, state.seq, state.seq)
-        return pack(
-            {
-                "seq": state.seq,
-                "last": last[0][1] if last else b"",
-                "prefixes": self._db.prefixes(state.name),
-                "rows": list(self._db.triples(state.name)),
-            }
-        )
+        name = keys.check_space(request["space"])
+        db = self._db_()
+        state = self._spaces.get(name)
+        seq = state.seq if state else 0
+        last = db.log(name, seq, seq)
+        return {
+            "seq": seq,
+            "last": last[0][1] if last else b"",
+            "prefixes": db.prefixes(name),
+            "rows": list(db.triples(name)),
+        }
 
     def _forget(self, name: str) -> None:
         """Drop a space's state from memory (its database was replaced: `_space` reloads it)."""
         self._spaces.pop(name, None)
         gc.unfreeze()  # frozen at start (space.heap), the old state could never be freed
 
-    def _reject(self, req: _Request, exc: Exception) -> None:
-        what = "rejected" if isinstance(exc, QueryError) else "malformed, skipped:"
-        log.warning("%s %s on space %r: %s", what, req.kind, req.space, exc)
-        if req.query is not None:
-            req.query.reply_err(str(exc).encode())
-            req.query.drop()
+    def _db_(self) -> StoreDB:
+        assert self._db is not None
+        return self._db
 
     def _space(self, name: str) -> SpaceState:
         state = self._spaces.get(name)
         if state is None:
-            state = SpaceState(name)
-            assert self._db is not None
-            state.prefixes.update(self._db.prefixes(name))
-            state.load(self._db.triples(name))
-            state.seq = self._db.last_seq(name)
-            self._spaces[name] = state
+            state = self._spaces[name] = SpaceState(name, self._db_())
         return state
 
     # What this store serves in each role (declared by `Roles`, on the worker).
@@ -404,3 +346,12 @@ class StoreServer:
         message = unpack(payload)
         if isinstance(message, dict) and isinstance(message.get("seqs"), dict):
             self._acks.acked(str(message.get("store")), message["seqs"])
+
+
+def _op(payload: bytes | None) -> object:
+    """Return a query request's op without checking the rest (takes go to the writer)."""
+    try:
+        wire = unpack(payload or b"")
+    except MalformedPayload:
+        return None
+    return wire.get("op") if isinstance(wire, dict) else None

@@ -1,171 +1,220 @@
-"""One space's current state in memory, and how a changeset changes it.
+"""Decide what a changeset really changes in one space, and give it its seq.
 
-The database is the durable record; this is the indexed copy that answers
-template reads and SPARQL, and decides what a changeset really changes:
+This is the "decide and order" half of the store (see `space/store/__init__.py`):
 functional properties replace their old value, the later HLC timestamp wins,
-and only net changes are logged and published.
+only net changes are logged and published, and each net changeset gets the
+next sequence number. It reads the database and, within a batch not yet
+committed, its own overlay of the batch's earlier changesets; it never writes:
+what it decides is an `Entry` the server commits.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from dataclasses import dataclass
 
-from rdflib import Graph
-from rdflib.graph import ReadOnlyGraphAggregate
-from rdflib.namespace import OWL, RDF
-from rdflib.term import Node
+import pyoxigraph as ox
 
-from space.changeset import Changeset, hlc_key
-from space.keys import ASSERTED, INFERRED
-from space.memory import BulkMemory
+from space.changeset import WIRE_VERSION, hlc_key, pack, published_seq, unpack
 from space.prefixes import PrefixMap
-from space.store.db import Commit
-from space.template import Template
-from space.terms import Triple, from_nt, to_nt
+from space.store import oxterms
+from space.store.db import FUNCTIONAL, Entry, StoreDB
+from space.store.intake import LISTS, WriteRequest
+from space.store.oxterms import OxTerm, OxTriple
+
+_TYPE, _FUNCTIONAL_CLASS = (ox.NamedNode(x) for x in FUNCTIONAL)
+
+
+@dataclass
+class Net:
+    """A decided changeset: its log entry, and what its writer is told was not applied."""
+
+    entry: Entry
+    texts: list[list[list[str]]]  # N-Triples of add, del, iadd, idel (for triple keys)
 
 
 class SpaceState:
-    """The state of one space: an asserted and an inferred graph, and its sequence number."""
+    """One space's sequence number, prefixes and functional-property timestamps.
 
-    def __init__(self, name: str) -> None:
+    Worker thread only. After a failed commit the server drops it and loads a
+    new one from the database (`StoreDB.load`), so it never runs ahead of disk.
+    """
+
+    def __init__(self, name: str, db: StoreDB) -> None:
+        loaded = db.load(name)
         self.name = name
-        self.seq = 0
-        self.prefixes = PrefixMap()
-        # Two plain graphs (no named graphs; updated in bulk); SPARQL reads their union.
-        self.stores = {ASSERTED: BulkMemory(), INFERRED: BulkMemory()}
-        self.graphs: dict[str, Graph] = {g: Graph(store=m) for g, m in self.stores.items()}
-        self.union = ReadOnlyGraphAggregate(list(self.graphs.values()))
-        self._stamps: dict[tuple[Node, Node], str] = {}
-        self._functional: set[Node] = set()
+        self.db = db
+        self.seq = loaded.seq
+        self.prefixes = PrefixMap(loaded.prefixes)
+        self._stamps = loaded.stamps
+        self._functional = loaded.functional
+        self._overlay: dict[tuple[str, OxTriple], bool] = {}
+        self._pending_objects: dict[tuple[OxTerm, OxTerm], set[OxTerm]] = {}
+        self._refresh_functional = False
 
-    def load(self, rows: Iterable[tuple[str, str, str, str, str]]) -> None:
-        """Fill the state from database rows `(g, s, p, o, ts)`."""
-        for g, s, p, o, ts in rows:
-            triple = (from_nt(s), from_nt(p), from_nt(o))
-            self.stores[g].put(triple)
-            if ts:
-                self._stamps[(triple[0], triple[1])] = ts
-        self._functional = self._functional_properties()
+    def settle(self) -> None:
+        """Forget the overlay once its batch is committed."""
+        self._overlay.clear()
+        self._pending_objects.clear()
+        if self._refresh_functional:
+            self._functional = self.db.functional(self.name)
+            self._refresh_functional = False
 
-    def _functional_properties(self) -> set[Node]:
-        return {
-            s for g in self.graphs.values() for s in g.subjects(RDF.type, OWL.FunctionalProperty)
-        }
+    def decide(self, req: WriteRequest, stamp: str) -> tuple[Net | None, list[dict]]:
+        """Return the net changeset of a write with the next seq (None if nothing changes).
 
-    def apply(self, cs: Changeset) -> tuple[Changeset, Commit] | None:
-        """Apply a changeset; return the net changeset (with its seq) and its database commit.
-
-        Returns None when nothing changes: the changeset is then not logged.
+        Also returns the additions not applied and why (`{"triple", "reason"}`),
+        for the writer's acknowledgement.
         """
-        asserted, inferred = self.stores[ASSERTED], self.stores[INFERRED]
-        stamp = cs.timestamp
-        added = self._functional_additions(cs.added, stamp)
-        removed, added = _net(asserted, cs.removed + added.replaced, added.kept)
-        i_removed, i_added = _net(inferred, cs.inferred_removed, cs.inferred_added)
-        new_prefixes = self.prefixes.update(cs.prefixes)
+        kept, replaced, dropped = self._functional_additions(req.added, stamp)
+        removed, added = self._net("t", req.removed + replaced, kept)
+        i_removed, i_added = self._net("i", req.inferred_removed, req.inferred_added)
+        new_prefixes = self.prefixes.update(req.prefixes)
         if not (removed or added or i_removed or i_added or new_prefixes):
-            return None
-        net = Changeset(
-            id=cs.id,
-            agent=cs.agent,
-            timestamp=stamp,
-            cause=cs.cause,
-            added=added,
-            removed=removed,
-            inferred_added=i_added,
-            inferred_removed=i_removed,
-            prefixes=new_prefixes,
+            return None, dropped
+        entry = Entry(
+            space=self.name,
             seq=self.seq + 1,
+            request=req.id,
+            payload=b"",
+            removed=removed,
+            added=added,
+            inferred_removed=i_removed,
+            inferred_added=i_added,
+            prefixes=new_prefixes,
         )
-        return net, self.install(net)
-
-    def install(self, net: Changeset, payload: bytes | None = None) -> Commit:
-        """Apply a net changeset exactly as given and take its seq; return its database commit.
-
-        `apply` ends here; a follower store installs the leader's net changesets directly.
-        """
-        self.prefixes.update(net.prefixes)
-        self.stores[ASSERTED].update(net.removed, net.added)
-        self.stores[INFERRED].update(net.inferred_removed, net.inferred_added)
-        every = (*net.removed, *net.added, *net.inferred_removed, *net.inferred_added)
-        if any(t[2] in _FUNCTIONAL_CLASS and t[1] == RDF.type for t in every):
-            self._functional = self._functional_properties()
-        for t in net.removed:
-            self._stamps.pop((t[0], t[1]), None)
-        # Each triple's texts once, for the database rows and the payload alike.
-        added, removed, i_added, i_removed = (
-            [_row(t) for t in triples]
-            for triples in (net.added, net.removed, net.inferred_added, net.inferred_removed)
-        )
-        stamped = []
-        for t, row in zip(net.added, added, strict=True):
-            stamp = net.timestamp if t[1] in self._functional else ""
-            if stamp:
-                self._stamps[(t[0], t[1])] = stamp
-            stamped.append((ASSERTED, row, stamp))
-        self.seq = net.seq
-        if payload is None:
-            payload = net.encode(texts=(added, removed, i_added, i_removed))
-        commit = Commit(space=self.name, seq=net.seq, payload=payload, prefixes=net.prefixes)
-        commit.removed = [(ASSERTED, row) for row in removed] + [
-            (INFERRED, row) for row in i_removed
+        self._stamp(entry, stamp)
+        texts = [
+            [oxterms.triple_text(t) for t in ts] for ts in (added, removed, i_added, i_removed)
         ]
-        commit.added = stamped + [(INFERRED, row, "") for row in i_added]
-        return commit
+        wire: dict = {"v": WIRE_VERSION, "id": req.id, "agent": req.agent, "ts": stamp}
+        if req.cause:
+            wire["cause"] = req.cause
+        wire["seq"] = entry.seq
+        if new_prefixes:
+            wire["prefixes"] = new_prefixes
+        for name, listed in zip(LISTS, texts, strict=True):
+            if listed:
+                wire[name] = listed
+        entry.payload = pack(wire)
+        self.seq = entry.seq
+        return Net(entry, texts), dropped
 
-    def _functional_additions(self, added: list[Triple], stamp: str) -> _Additions:
-        """Split additions into those kept and the old values they replace."""
-        result = _Additions()
-        latest: dict[tuple[Node, Node], Triple] = {}
+    def install(self, payload: bytes) -> Net:
+        """Take a leader's published net changeset exactly as given (a follower store).
+
+        Raises:
+            MalformedPayload: not a published changeset.
+        """
+        wire = unpack(payload)
+        seq = published_seq(wire)
+        assert isinstance(wire, dict)
+        lists = [[oxterms.triple(t) for t in wire.get(name) or ()] for name in LISTS]
+        added, removed, i_added, i_removed = lists
+        prefixes = self.prefixes.update(wire.get("prefixes") or {})
+        entry = Entry(
+            space=self.name,
+            seq=seq,
+            request=str(wire.get("id") or ""),
+            payload=payload,
+            removed=removed,
+            added=added,
+            inferred_removed=i_removed,
+            inferred_added=i_added,
+            prefixes=prefixes,
+        )
+        self._net("t", removed, added)
+        self._net("i", i_removed, i_added)
+        self._stamp(entry, str(wire.get("ts") or ""))
+        self.seq = seq
+        texts = [[oxterms.triple_text(t) for t in ts] for ts in lists]
+        return Net(entry, texts)
+
+    def _stamp(self, entry: Entry, stamp: str) -> None:
+        """Record the timestamps of functional values the entry adds or removes."""
+        for t in (*entry.removed, *entry.added, *entry.inferred_removed, *entry.inferred_added):
+            if t[1] == _TYPE and t[2] == _FUNCTIONAL_CLASS:
+                self._refresh_functional = True
+                self._functional.add(t[0])
+        for s, p, _o in entry.removed:
+            old = self._stamps.pop((s, p), None)
+            if old is not None:
+                entry.stamps_removed.append((s, p, ox.Literal(old)))
+        if not stamp:
+            return
+        for s, p, _o in entry.added:
+            if p in self._functional:
+                old = self._stamps.get((s, p))
+                if old is not None and old != stamp:
+                    entry.stamps_removed.append((s, p, ox.Literal(old)))
+                self._stamps[(s, p)] = stamp
+                entry.stamps_added.append((s, p, ox.Literal(stamp)))
+
+    def _functional_additions(
+        self, added: list[OxTriple], stamp: str
+    ) -> tuple[list[OxTriple], list[OxTriple], list[dict]]:
+        """Split additions into those kept, the old values they replace, and those dropped."""
+        kept: list[OxTriple] = []
+        replaced: list[OxTriple] = []
+        dropped: list[dict] = []
+        latest: dict[tuple[OxTerm, OxTerm], OxTriple] = {}
         for t in added:
             if t[1] in self._functional:
-                latest[(t[0], t[1])] = t  # within one changeset the last value wins
+                earlier = latest.get((t[0], t[1]))
+                if earlier is not None and earlier != t:
+                    dropped.append(
+                        _dropped(
+                            earlier,
+                            "a later value of this functional property in the same changeset",
+                        )
+                    )
+                latest[(t[0], t[1])] = t
             else:
-                result.kept.append(t)
-        asserted = self.stores[ASSERTED]
+                kept.append(t)
         for (s, p), t in latest.items():
             held = self._stamps.get((s, p))
+            objects = self._objects(s, p)
             if held and stamp and hlc_key(stamp) < hlc_key(held):
-                continue  # an older write of a functional property loses, everywhere
-            result.kept.append(t)
-            result.replaced.extend((s, p, o) for o in asserted.objects_of(s, p) if o != t[2])
-        return result
+                if t[2] not in objects:
+                    why = f"a newer value is held (written at {held}, this at {stamp})"
+                    dropped.append(_dropped(t, why))
+                continue
+            kept.append(t)
+            replaced.extend((s, p, o) for o in objects if o != t[2])
+        return kept, replaced, dropped
 
-    def match(self, template: Template, graph: str = "all") -> list[Triple]:
-        """Return the triples that match a template in one graph or both (no duplicates)."""
-        pattern = template.pattern()
-        graphs = list(self.graphs.values()) if graph == "all" else [self.graphs[graph]]
-        seen: dict[Triple, None] = {}
-        check = bool(template.variables())
-        for g in graphs:
-            for t in g.triples(pattern):
-                if not check or template.match(t) is not None:
-                    seen[t] = None
-        return list(seen)
+    def _objects(self, s: OxTerm, p: OxTerm) -> list[OxTerm]:
+        overlay = self._overlay
+        held = self.db.objects(self.name, s, p)
+        found = [o for o in held if overlay.get(("t", (s, p, o))) is not False]
+        for o in self._pending_objects.get((s, p), ()):
+            if o not in found and self._overlay.get(("t", (s, p, o))):
+                found.append(o)
+        return found
 
-    def match_by_graph(self, template: Template) -> dict[str, list[Triple]]:
-        """Return the matching triples of each graph, keyed `t` (asserted) and `i` (inferred)."""
-        return {g: self.match(template, g) for g in self.graphs}
+    def holds(self, t: OxTriple) -> bool:
+        """Return whether the asserted graph holds a triple, counting the batch's writes so far."""
+        return self._has("t", t)
 
+    def _has(self, which: str, t: OxTriple) -> bool:
+        held = self._overlay.get((which, t))
+        return held if held is not None else self.db.has(self.name, which, t)
 
-class _Additions:
-    def __init__(self) -> None:
-        self.kept: list[Triple] = []
-        self.replaced: list[Triple] = []
-
-
-def _net(
-    graph: BulkMemory, removed: list[Triple], added: list[Triple]
-) -> tuple[list[Triple], list[Triple]]:
-    """Return what removing then adding really changes in a graph."""
-    has = graph.has
-    gone = {t: None for t in removed if has(t)}
-    new = {t: None for t in added if not has(t) or t in gone}
-    return [t for t in gone if t not in new], [t for t in new if t not in gone]
-
-
-_FUNCTIONAL_CLASS = {OWL.FunctionalProperty}
+    def _net(
+        self, which: str, removed: list[OxTriple], added: list[OxTriple]
+    ) -> tuple[list[OxTriple], list[OxTriple]]:
+        """Return what removing then adding really changes in a graph; note it in the overlay."""
+        gone = {t: None for t in removed if self._has(which, t)}
+        new = {t: None for t in added if t in gone or not self._has(which, t)}
+        net_removed = [t for t in gone if t not in new]
+        net_added = [t for t in new if t not in gone]
+        for t in net_removed:
+            self._overlay[(which, t)] = False
+        for t in net_added:
+            self._overlay[(which, t)] = True
+            if which == "t":
+                self._pending_objects.setdefault((t[0], t[1]), set()).add(t[2])
+        return net_removed, net_added
 
 
-def _row(t: Triple) -> tuple[str, str, str]:
-    return (to_nt(t[0]), to_nt(t[1]), to_nt(t[2]))
+def _dropped(t: OxTriple, reason: str) -> dict:
+    return {"triple": oxterms.triple_text(t), "reason": reason}

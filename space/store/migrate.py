@@ -1,0 +1,139 @@
+"""Open the Oxigraph database of a data directory, migrating an old SQLite one first.
+
+Before Oxigraph, a data directory held `space.sqlite3`. Opening such a
+directory must never show an empty space: its triples, prefixes, functional
+timestamps and log are copied into Oxigraph on first open (the SQLite file is
+left as it was, renamed `space.sqlite3.migrated`), and the format marker is
+written last, so a migration cut short starts again from scratch next time.
+`python -m space.store.migrate DIR` does the same without serving.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sqlite3
+import sys
+from pathlib import Path
+
+import pyoxigraph as ox
+
+from space.changeset import unpack
+from space.errors import MalformedPayload, SpaceError
+from space.store import db, oxterms
+
+log = logging.getLogger("tspace.store")
+
+OLD_FILE = "space.sqlite3"
+
+
+class OldDataDir(SpaceError):
+    """A data directory in an older format that could not be migrated."""
+
+
+def open_store(data_dir: Path, path: Path) -> ox.Store:
+    """Open (creating if needed) the Oxigraph store at `path`, migrating `data_dir`'s SQLite.
+
+    Raises:
+        DataDirInUse: another process holds the database.
+        OldDataDir: the old database could not be read.
+    """
+    try:
+        store = ox.Store(str(path))
+    except OSError as exc:
+        if "lock" in str(exc).lower():
+            raise db.DataDirInUse(
+                f"data directory {path.parent} is in use by another store process"
+            ) from None
+        raise
+    marked = any(store.quads_for_pattern(db.STORE, db.FORMAT_P, None, db.META))
+    old = data_dir / OLD_FILE
+    if not marked:
+        if old.exists():
+            _migrate(old, store)
+        store.add(ox.Quad(db.STORE, db.FORMAT_P, ox.Literal(db.FORMAT), db.META))
+        store.flush()
+    return store
+
+
+def _migrate(old: Path, store: ox.Store) -> None:
+    """Copy every space of an SQLite database into an (emptied) Oxigraph store."""
+    log.warning("migrating %s to Oxigraph (once)", old)
+    store.clear()
+    try:
+        conn = sqlite3.connect(f"file:{old}?mode=ro", uri=True)
+        try:
+            spaces = [r[0] for r in conn.execute("SELECT DISTINCT space FROM log")]
+            skipped = 0
+            for space in spaces:
+                skipped += _copy_space(conn, store, space)
+        finally:
+            conn.close()
+    except sqlite3.Error as exc:
+        raise OldDataDir(
+            f"{old} (a data directory from before Oxigraph) could not be read ({exc}); repair it, "
+            f"then migrate it with: python -m space.store.migrate {old.parent}"
+        ) from exc
+    store.flush()
+    old.rename(old.with_name(OLD_FILE + ".migrated"))
+    if skipped:
+        log.warning("migration skipped %d triple(s) that are not valid RDF", skipped)
+    log.warning("migrated %d space(s) from %s", len(spaces), old)
+
+
+def _copy_space(conn: sqlite3.Connection, store: ox.Store, space: str) -> int:
+    """Copy one space; return how many invalid triples were skipped."""
+    seq = conn.execute("SELECT MAX(seq) FROM log WHERE space=?", (space,)).fetchone()[0] or 0
+    keep = conn.execute(
+        "SELECT seq, payload FROM log WHERE space=? ORDER BY seq", (space,)
+    ).fetchall()
+    prefixes = dict(conn.execute("SELECT name, ns FROM prefixes WHERE space=?", (space,)))
+    rows = conn.execute("SELECT g, s, p, o, ts FROM triples WHERE space=?", (space,))
+    quads, skipped = [], 0
+    for g, s, p, o, ts in rows:
+        try:
+            t = oxterms.triple([s, p, o])
+        except MalformedPayload:
+            skipped += 1
+            continue
+        quads.append(ox.Quad(*t, db.graph(space, g)))
+        if ts and g == "t":
+            quads.append(ox.Quad(t[0], t[1], ox.Literal(ts), db.graph(space, "stamps")))
+    node = db.space_node(space)
+    quads.append(ox.Quad(node, db.SEQ, ox.Literal(str(seq), datatype=db.INT), db.META))
+    quads += [
+        ox.Quad(node, db.PREFIX, ox.Literal(f"{n} {ns}"), db.META) for n, ns in prefixes.items()
+    ]
+    for n, payload in keep:
+        quads += db.log_quads(space, n, _request_id(payload), payload)
+    store.bulk_extend(quads)
+    return skipped
+
+
+def _request_id(payload: bytes) -> str:
+    """Return the changeset id of a logged payload (so a retry of it is still recognised)."""
+    try:
+        wire = unpack(payload)
+    except MalformedPayload:
+        return ""
+    ident = wire.get("id") if isinstance(wire, dict) else None
+    return ident if isinstance(ident, str) else ""
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Migrate a data directory in place (`python -m space.store.migrate DIR`)."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("data_dir", type=Path)
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    try:
+        store = open_store(args.data_dir, args.data_dir / "oxigraph")
+    except SpaceError as exc:
+        print(f"tspace: {exc}", file=sys.stderr)
+        return 1
+    del store
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,78 @@
+"""Publish committed changesets: whole on `@/changes`, then triple by triple on their keys."""
+
+from __future__ import annotations
+
+import logging
+
+import zenoh
+
+from space import keys
+from space.changeset import pack
+from space.store.state import Net, SpaceState
+from space.terms import triple_from_nt
+
+log = logging.getLogger("tspace.store")
+
+MAX_KEY = 60_000  # bytes: a longer triple key is not published (Zenoh refuses ~64 KiB keys)
+
+
+class Publisher:
+    """Publish on a session; writer thread only. `close` undeclares its matching publishers."""
+
+    def __init__(self, session: zenoh.Session, root: str) -> None:
+        self.session = session
+        self.root = root
+        self._graph_publishers: dict[tuple[str, str], zenoh.Publisher] = {}
+
+    def close(self) -> None:
+        """Undeclare the publishers used to learn whether anyone watches a graph."""
+        for publisher in self._graph_publishers.values():
+            publisher.undeclare()
+        self._graph_publishers = {}
+
+    def publish(self, committed: list[tuple[SpaceState, Net]]) -> None:
+        """Publish committed changesets, whole first (every agent waits for them), then triples."""
+        block = zenoh.CongestionControl.BLOCK
+        for state, net in committed:
+            key = keys.service_key(state.name, "changes", self.root)
+            self.session.put(key, net.entry.payload, congestion_control=block)
+        for state, net in committed:
+            self._triples(state, net)
+
+    def _triples(self, state: SpaceState, net: Net) -> None:
+        """Publish each triple of a net changeset on its key, for plain Zenoh subscribers.
+
+        A graph nobody subscribes to is skipped without making its keys (Zenoh
+        would drop the samples anyway): a 600-triple answer then costs nothing here.
+        """
+        s = self.session
+        block = zenoh.CongestionControl.BLOCK
+        meta = pack({"id": net.entry.request, "seq": net.entry.seq})
+        added, removed, i_added, i_removed = net.texts
+        for graph, gone, new in (
+            (keys.ASSERTED, removed, added),
+            (keys.INFERRED, i_removed, i_added),
+        ):
+            if not (gone or new) or not self._watched(state.name, graph):
+                continue
+            for texts, put in ((gone, False), (new, True)):
+                for text in texts:
+                    key = keys.triple_key(
+                        state.name, graph, triple_from_nt(text), state.prefixes, self.root
+                    )
+                    if len(key) > MAX_KEY:
+                        log.info(
+                            "triple key of %d bytes not published (limit %d)", len(key), MAX_KEY
+                        )
+                    elif put:
+                        s.put(key, meta, congestion_control=block)
+                    else:
+                        s.delete(key, attachment=meta, congestion_control=block)
+
+    def _watched(self, space: str, graph: str) -> bool:
+        """Return whether any subscriber matches a graph's triple keys (Zenoh's matching status)."""
+        publisher = self._graph_publishers.get((space, graph))
+        if publisher is None:
+            key = f"{self.root}/{space}/{graph}/**"
+            publisher = self._graph_publishers[(space, graph)] = self.session.declare_publisher(key)
+        return publisher.matching_status.matching

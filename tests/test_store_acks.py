@@ -1,0 +1,74 @@
+"""An acknowledgement tells the truth: the triples the store did not apply, and why."""
+
+from pathlib import Path
+
+import pytest
+from rdflib import Literal, Namespace
+from rdflib.namespace import OWL, RDF
+
+from conftest import AC_NS
+from space import NotApplied
+
+AC = Namespace(AC_NS)
+
+
+def _functional(ts) -> None:
+    ts.write([(AC.battery_level, RDF.type, OWL.FunctionalProperty)])
+
+
+def test_a_value_that_lost_to_a_newer_one_is_reported_not_acknowledged_as_done(ts):
+    _functional(ts)
+    older = ts.changeset([(AC.b1, AC.battery_level, Literal("high"))])
+    newer = ts.changeset([(AC.b1, AC.battery_level, Literal("low"))])
+    assert ts.send(newer).dropped == []
+    ack = ts.send(older)
+    assert ack == older.id  # still the id, as before
+    assert [d.triple for d in ack.dropped] == [(AC.b1, AC.battery_level, Literal("high"))]
+    assert "newer value" in ack.dropped[0].reason
+    assert set(ts.query((AC.b1, AC.battery_level, None)).objects()) == {Literal("low")}
+
+
+def test_strict_mode_raises_naming_the_triple_and_the_rest_is_applied(ts):
+    _functional(ts)
+    older = ts.changeset(
+        [(AC.b2, AC.battery_level, Literal("high")), (AC.b2, AC.checked, Literal(True))]
+    )
+    ts.send(ts.changeset([(AC.b2, AC.battery_level, Literal("low"))]))
+    with pytest.raises(NotApplied, match="battery_level") as caught:
+        ts.send(older, strict=True)
+    assert len(caught.value.ack.dropped) == 1
+    assert (AC.b2, AC.checked, Literal(True)) in set(ts.query((AC.b2, None, None)))
+
+
+def test_two_values_of_a_functional_property_in_one_changeset_keep_the_last(ts):
+    _functional(ts)
+    ack = ts.write(
+        [(AC.b3, AC.battery_level, Literal("high")), (AC.b3, AC.battery_level, Literal("low"))]
+    )
+    assert [d.triple[2] for d in ack.dropped] == [Literal("high")]
+    assert "same changeset" in ack.dropped[0].reason
+    assert set(ts.query((AC.b3, AC.battery_level, None)).objects()) == {Literal("low")}
+
+
+def test_cli_write_prints_what_was_not_applied_and_strict_exits_1(ts, run_tspace, tmp_path: Path):
+    _functional(ts)
+    doc = tmp_path / "two.ttl"
+    doc.write_text(f'@prefix ac: <{AC_NS}> .\nac:b4 ac:battery_level "high", "low" .\n')
+    done = run_tspace("write", str(doc))
+    assert done.returncode == 0, done.stderr
+    assert "not applied" in done.stderr and "battery_level" in done.stderr
+    strict = run_tspace("write", "--strict", str(doc))
+    assert strict.returncode == 1
+    assert "not applied" in strict.stderr
+
+
+def test_a_retry_gets_the_first_ack_with_what_was_not_applied(ts):
+    _functional(ts)
+    older = ts.changeset([(AC.b5, AC.battery_level, Literal("high")), (AC.b5, AC.seen, Literal(1))])
+    ts.send(ts.changeset([(AC.b5, AC.battery_level, Literal("low"))]))
+    first = ts.send(older)
+    again = ts.send(older)  # as a client would after a lost reply
+    assert again.again and not first.again
+    assert again.seq == first.seq
+    assert again.dropped == first.dropped and len(first.dropped) == 1
+    assert ts.snapshot()[1] == first.seq, "applied once"

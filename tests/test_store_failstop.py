@@ -1,0 +1,104 @@
+"""A store that cannot commit refuses writes, never serves what is not on disk, and resumes.
+
+The data directory is a small tmpfs of its own (root only: `mount`), filled up
+or mounted read-only under the running store.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from rdflib import Literal, Namespace
+
+from conftest import AC_NS, Server, wait_for
+from space import ChangesetRejected, SpaceError, TripleSpace
+
+AC = Namespace(AC_NS)
+
+pytestmark = pytest.mark.skipif(os.geteuid() != 0, reason="mounting a tmpfs needs root")
+
+
+@pytest.fixture
+def disk(tmp_path: Path) -> Iterator[Path]:
+    mount = tmp_path / "disk"
+    mount.mkdir()
+    subprocess.run(["mount", "-t", "tmpfs", "-o", "size=24m", "tmpfs", str(mount)], check=True)
+    try:
+        yield mount
+    finally:
+        subprocess.run(["umount", "-l", str(mount)], check=False)
+
+
+def _fill(path: Path) -> None:
+    with open(path, "wb") as f:
+        try:
+            while True:
+                f.write(b"\0" * 65536)
+                f.flush()
+        except OSError:
+            pass  # full: that is the point
+
+
+def _writes(ts: TripleSpace, i: int) -> bool:
+    try:
+        ts.write([(AC.after, AC.n, Literal(i))], timeout=5)
+        return True
+    except ChangesetRejected:
+        return False
+
+
+def test_a_full_disk_refuses_writes_keeps_reads_and_resumes_once_freed(disk: Path):
+    srv = Server(disk / "data")
+    srv.log = disk.parent / "serve.log"
+    srv.start()
+    try:
+        with TripleSpace.open(srv.endpoint, space="full") as ts:
+            ts.write([(AC.before, AC.n, Literal(i)) for i in range(10)])
+            _fill(disk / "filler")
+            big = [(AC.big, AC.n, Literal(f"{i}" + "x" * 8000)) for i in range(1500)]
+            with pytest.raises(ChangesetRejected, match=r"not applied.*(space|No space)"):
+                ts.write(big, timeout=30)
+            with pytest.raises(ChangesetRejected, match="refuses writes"):
+                ts.write([(AC.small, AC.n, Literal(1))])
+            # what is on disk is still served, and nothing of the refused writes
+            assert len(ts.query((AC.before, None, None))) == 10
+            assert len(ts.query((AC.big, None, None))) == 0
+            assert len(ts.query((AC.small, None, None))) == 0
+            (disk / "filler").unlink()
+            wait_for(lambda: _writes(ts, 1), 20, "writes to be accepted again")
+            seq = ts.snapshot()[1]
+        srv.stop(signal.SIGKILL)
+        srv.start()
+        with TripleSpace.open(srv.endpoint, space="full") as ts:
+            assert ts.snapshot()[1] == seq
+            assert len(ts.query((AC.big, None, None))) == 0
+    finally:
+        srv.stop()
+
+
+def test_a_read_only_data_directory_serves_reads_refuses_writes_then_resumes(disk: Path):
+    srv = Server(disk / "data")
+    srv.log = disk.parent / "serve.log"
+    srv.start()
+    with TripleSpace.open(srv.endpoint, space="ro") as ts:
+        ts.write([(AC.kept, AC.n, Literal(1))])
+    srv.stop()
+    subprocess.run(["mount", "-o", "remount,ro", str(disk)], check=True)
+    srv.start()
+    try:
+        with TripleSpace.open(srv.endpoint, space="ro") as ts:
+            assert len(ts.query((AC.kept, None, None))) == 1
+            with pytest.raises(ChangesetRejected, match="read-only"):
+                ts.write([(AC.lost, AC.n, Literal(1))])
+            subprocess.run(["mount", "-o", "remount,rw", str(disk)], check=True)
+            wait_for(lambda: _writes(ts, 2), 20, "writes to be accepted again")
+            assert len(ts.query((AC.kept, None, None))) == 1
+    except SpaceError:
+        raise
+    finally:
+        srv.stop()

@@ -1,0 +1,97 @@
+"""An old SQLite data directory is migrated on first open, never opened as an empty space."""
+
+from __future__ import annotations
+
+import signal
+import sqlite3
+import subprocess
+from pathlib import Path
+
+import msgpack
+from rdflib import Literal, Namespace
+
+from conftest import AC_NS, Server, free_port, tspace_cmd
+from space import Changeset, TripleSpace
+
+AC = Namespace(AC_NS)
+# The schema the store used before Oxigraph (space/store/db.py up to a5d5dd9).
+OLD_SCHEMA = """
+CREATE TABLE triples (space TEXT NOT NULL, g TEXT NOT NULL, s TEXT NOT NULL, p TEXT NOT NULL,
+    o TEXT NOT NULL, ts TEXT NOT NULL DEFAULT '', PRIMARY KEY (space, g, s, p, o)) WITHOUT ROWID;
+CREATE TABLE log (space TEXT NOT NULL, seq INTEGER NOT NULL, payload BLOB NOT NULL,
+    PRIMARY KEY (space, seq)) WITHOUT ROWID;
+CREATE TABLE prefixes (space TEXT NOT NULL, name TEXT NOT NULL, ns TEXT NOT NULL,
+    PRIMARY KEY (space, name)) WITHOUT ROWID;
+"""
+TS = "7710779730219079252/79c651f11de1a2a3"
+
+
+def _old_dir(data: Path) -> None:
+    data.mkdir(parents=True)
+    conn = sqlite3.connect(data / "space.sqlite3")
+    conn.executescript(OLD_SCHEMA)
+    level, functional = (
+        f"<{AC_NS}battery_level>",
+        "<http://www.w3.org/2002/07/owl#FunctionalProperty>",
+    )
+    rdf_type = "<http://www.w3.org/1999/02/22-rdf-syntax-ns#type>"
+    rows = [
+        ("t", level, rdf_type, functional, ""),
+        ("t", f"<{AC_NS}b1>", level, '"low"', TS),
+        ("t", f"<{AC_NS}b1>", f"<{AC_NS}name>", '"battery"@en', ""),
+        ("i", f"<{AC_NS}b1>", rdf_type, f"<{AC_NS}Device>", ""),
+        ("t", "<http://a b>", f"<{AC_NS}bad>", '"accepted before"', ""),  # not RDF: skipped
+    ]
+    conn.executemany("INSERT INTO triples VALUES ('old', ?, ?, ?, ?, ?)", rows)
+    conn.execute("INSERT INTO prefixes VALUES ('old', 'ac', ?)", (AC_NS,))
+    for seq in (1, 2, 3):
+        payload = msgpack.packb({"v": 1, "id": f"cs{seq}", "agent": "a", "ts": TS, "seq": seq})
+        conn.execute("INSERT INTO log VALUES ('old', ?, ?)", (seq, payload))
+    conn.commit()
+    conn.close()
+
+
+def test_an_old_data_directory_is_migrated_with_its_state_log_and_seq(tmp_path: Path):
+    data = tmp_path / "data"
+    _old_dir(data)
+    srv = Server(data)
+    srv.start()
+    try:
+        with TripleSpace.open(srv.endpoint, space="old") as ts:
+            graph, seq = ts.snapshot()
+            assert seq == 3
+            assert len(graph) == 4
+            assert len(ts.query("?b ac:battery_level 'low'")) == 1  # prefixes came along
+            assert len(ts.query(None, graph="inferred")) == 1
+            assert [Changeset.decode(p).id for p in ts._fetch_log(1, 3)] == ["cs1", "cs2", "cs3"]
+            # the functional property and its timestamp came along: an older value loses
+            ack = ts.send(ts.changeset([(AC.b1, AC.battery_level, Literal("high"))]))
+            assert ack.seq == 4 and ack.dropped == []
+            old = Changeset(
+                agent="x", timestamp=TS[:-1] + "0", added=[(AC.b1, AC.battery_level, Literal("x"))]
+            )
+            assert ts.send(old).dropped
+        assert "migrated 1 space(s)" in srv.logs()
+        assert (data / "space.sqlite3.migrated").exists() and not (data / "space.sqlite3").exists()
+        srv.stop(signal.SIGKILL)
+        srv.start()
+        with TripleSpace.open(srv.endpoint, space="old") as ts:
+            assert ts.snapshot()[1] == 4
+    finally:
+        srv.stop()
+
+
+def test_an_unreadable_old_database_is_refused_in_one_line_naming_the_command(tmp_path: Path):
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "space.sqlite3").write_bytes(b"not a database at all" * 100)
+    port = free_port()
+    done = subprocess.run(
+        tspace_cmd("serve", "--listen", f"tcp/127.0.0.1:{port}", "--data", str(data)),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 1
+    lines = [line for line in done.stderr.splitlines() if line.startswith("tspace serve:")]
+    assert len(lines) == 1 and "python -m space.store.migrate" in lines[0], done.stderr
