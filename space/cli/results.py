@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import TextIO
 
-from rdflib import Graph
+from rdflib import Graph, Literal
 from rdflib.query import Result
 
 from space.display import sparql_json, table
@@ -42,6 +42,20 @@ def print_template(
         rows = list({tuple(b[n] for n in names) for t in triples if (b := template.match(t))})
     else:
         names, rows = ["s", "p", "o"], list(triples)
+    if fmt == "json":
+        out.write(sparql_json(names, rows) + "\n")
+    else:
+        out.write(table(names, rows, prefixes, sort=True) + "\n")
+
+
+def print_lifespans(
+    lives: list[tuple[Triple, float | None]], prefixes: PrefixMap, fmt: str, out: TextIO
+) -> None:
+    """Write triples with their remaining life in seconds (`permanent` if they have none)."""
+    rows = [
+        (*t, Literal("permanent") if left is None else Literal(round(left, 3))) for t, left in lives
+    ]
+    names = ["s", "p", "o", "lifespan"]
     if fmt == "json":
         out.write(sparql_json(names, rows) + "\n")
     else:
