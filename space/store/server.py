@@ -31,6 +31,7 @@ from space.errors import MalformedPayload, QueryError, SpaceError
 from space.store import intake, queries
 from space.store.acks import AckGate
 from space.store.db import CommitFailed, StoreDB
+from space.store.lifespans import Leases
 from space.store.publish import Publisher
 from space.store.readers import Readers
 from space.store.replica import Replica
@@ -43,6 +44,7 @@ _BATCH = 256
 HEARTBEAT = 0.5  # seconds between publications of each space's sequence number
 PROBE = 2.0  # seconds between attempts to commit again after a failed commit
 _READS = ("query", "log", "keys")
+EXPIRY_AGENT = "tspace-store"  # the agent of the changesets retracting expired writes
 
 
 class SpaceLimit(SpaceError):
@@ -98,6 +100,7 @@ class StoreServer:
         self._queue: queue.SimpleQueue[_Request | None] = queue.SimpleQueue()
         self._spaces: dict[str, SpaceState] = {}
         self._acks = AckGate()
+        self._leases = Leases()
         self._roles = Roles(
             session,
             root,
@@ -127,6 +130,7 @@ class StoreServer:
         if self._db.open_error:
             self.failed = self._db.open_error
             log.error("%s: serving reads, refusing writes until it commits", self.failed)
+        self._leases.load(self._db)
         replica = Replica(self.session, self.root, self._db, self._space, self._forget)
         for name in self._db.spaces():
             self._space(name)
@@ -194,7 +198,7 @@ class StoreServer:
                 self._probe()
                 next_beat = time.monotonic() + HEARTBEAT
             batch: list[_Request] = []
-            wait = next_beat - time.monotonic()
+            wait = min(next_beat - time.monotonic(), self._expiry_wait())
             held = self._acks.wait_time()
             try:
                 item = self._queue.get(timeout=max(0.0, wait if held is None else min(wait, held)))
@@ -216,6 +220,7 @@ class StoreServer:
     def _handle(self, batch: list[_Request]) -> None:
         pending: list[_Pending] = []
         replicas: list[_Request] = []
+        self._expire(pending)
         for req in batch:
             if req.kind == "replica":
                 replicas.append(req)
@@ -320,7 +325,8 @@ class StoreServer:
             return
         decided = [p for p in pending if p.net is not None]
         try:
-            self._db_().commit([p.net.entry for p in decided])  # type: ignore[union-attr]
+            entries = [p.net.entry for p in decided]  # type: ignore[union-attr]
+            self._db_().commit(entries, self._leases.take_changes())
         except CommitFailed as exc:
             self._fail(exc, pending)
             return
@@ -345,6 +351,7 @@ class StoreServer:
             self._spaces.pop(name, None)
         for name in {p.state.name for p in pending}:
             self._space(name)  # as the database has it, not as the failed batch would have
+        self._leases.load(self._db_())
         for p in pending:
             self._reject(p.req, CommitFailed(f"not applied: {exc}"))
 
@@ -460,7 +467,29 @@ class StoreServer:
         state = self._spaces.get(name)
         if state is None:
             state = self._spaces[name] = SpaceState(name, self._db_())
+            state.leases = self._leases
         return state
+
+    # Expiry: an ordinary changeset per expired write, decided here, in the writer's turn.
+
+    def _expiry_wait(self) -> float:
+        """Return the seconds until the next lease expires (a long time if none or not leading)."""
+        due = self._leases.next_due()
+        if due is None or self._roles.role != "leading" or self.failed:
+            return HEARTBEAT
+        return max(0.0, due - time.time())
+
+    def _expire(self, pending: list[_Pending]) -> None:
+        """Decide the retraction of each write whose lifespan ran out (a bounded number a turn)."""
+        if self._roles.role != "leading" or self.failed:
+            return
+        for (space, _expires, request), triples in self._leases.due(time.time()):
+            state = self._space(space)
+            write = intake.WriteRequest(
+                id=uuid.uuid4().hex, agent=EXPIRY_AGENT, cause=request, removed=triples
+            )
+            net, _ = state.decide(write, str(self.session.new_timestamp()))
+            pending.append(_Pending(_Request("expire", space, None), state, net, lambda _n: {}))
 
     # What this store serves in each role (declared by `Roles`, on the worker).
 
