@@ -140,10 +140,11 @@ def measure(endpoint: str, pid: int, code: Path | None, run: int, args) -> dict[
         )
         for name, seconds in store.sparql_times(endpoint, space, 3).items():
             rows[f"SPARQL on 100k: {name} (ms)"] = seconds * 1000
-        took, w50, w99 = store.writes_beside_a_slow_query(endpoint)
+        took, w50, w99, wmax = store.writes_beside_a_slow_query(endpoint)
         rows["a slow query's duration (s)"] = took
         rows["100 acked writes beside it, p50 (ms)"] = w50
         rows["100 acked writes beside it, p99 (ms)"] = w99
+        rows["100 acked writes beside it, max (ms)"] = wmax
         rows[f"tspace write of {args.bulk:,} triples (triples/s)"] = store.bulk_write(
             endpoint, code, args.bulk
         )

@@ -4,7 +4,7 @@ import signal
 
 import pytest
 from agentprocs import AgentProcess, Launcher, knowledge, value
-from rdflib import Literal, Namespace
+from rdflib import XSD, Literal, Namespace
 
 from conftest import AC_NS, Server, tspace_cmd, wait_for
 from space import TripleSpace
@@ -36,10 +36,10 @@ def test_a_user_request_takes_the_robot_to_the_patient(robot, launch):
     wait_for(lambda: state(robot, AC.navigation_status) == Literal("reached"))
     assert state(robot, AC.interacting_with) == AC.patient_ane
     assert state(robot, AC.requested_task) is None
-    assert (state(robot, AC.position_x), state(robot, AC.position_y)) == (
-        Literal("2.0", datatype=state(robot, AC.position_x).datatype),
-        Literal("12.0", datatype=state(robot, AC.position_y).datatype),
-    )
+    # the space holds XSD numbers by value, in canonical form ("2.0"^^xsd:decimal is "2")
+    x, y = state(robot, AC.position_x), state(robot, AC.position_y)
+    assert x.datatype == y.datatype == XSD.decimal
+    assert (x.toPython(), y.toPython()) == (2, 12)
 
 
 def test_speed_limit_and_disabled_navigation_act_on_the_base(robot, launch):

@@ -14,6 +14,7 @@ turns those IRIs back into `_:<label>`.
 from __future__ import annotations
 
 import re
+import threading
 from functools import lru_cache
 
 import pyoxigraph as ox
@@ -88,7 +89,7 @@ def _term(text: str) -> OxTerm:
             if lang:
                 return ox.Literal(value, language=lang)
             if datatype and datatype != XSD_STRING:
-                return ox.Literal(value, datatype=ox.NamedNode(datatype))
+                return canonical(ox.Literal(value, datatype=ox.NamedNode(datatype)))
             return ox.Literal(value)
         match = _BNODE_RE.match(text)
         if match is not None:
@@ -127,7 +128,7 @@ def triples(rows: list) -> list[OxTriple]:
         document = "".join(f"{s} {p} {o} .\n" for s, p, o in rows)
         try:
             parsed = [
-                (_skolem(q.subject), q.predicate, _skolem(q.object))
+                (_skolem(q.subject), q.predicate, canonical(_skolem(q.object)))
                 for q in ox.parse(document, format=ox.RdfFormat.N_TRIPLES)
             ]
         except (SyntaxError, ValueError):
@@ -156,6 +157,36 @@ def _well_formed(row: object) -> bool:
         if match is None:
             return False
     return True
+
+
+def canonical(node: OxTerm) -> OxTerm:
+    """Return a literal as the database will hold it: XSD values in their canonical form.
+
+    Oxigraph stores numbers, booleans, dates and durations by value, so
+    `"2.0"^^xsd:decimal` comes back as `"2"^^xsd:decimal`. Turning every such
+    literal into that form where it enters keeps what is published, acknowledged
+    and read the same term.
+    """
+    if isinstance(node, ox.Literal) and node.datatype.value.startswith(_XSD):
+        return _canonical(node.value, node.datatype.value)
+    return node
+
+
+@lru_cache(maxsize=_CACHED)
+def _canonical(value: str, datatype: str) -> ox.Literal:
+    scratch = getattr(_SCRATCH, "store", None)
+    if scratch is None:
+        scratch = _SCRATCH.store = ox.Store()  # in memory, one per thread
+    quad = ox.Quad(_SCRATCH_NODE, _SCRATCH_NODE, ox.Literal(value, datatype=ox.NamedNode(datatype)))
+    scratch.add(quad)
+    held = next(iter(scratch)).object
+    scratch.clear()
+    return held  # type: ignore[return-value]
+
+
+_XSD = "http://www.w3.org/2001/XMLSchema#"
+_SCRATCH = threading.local()
+_SCRATCH_NODE = ox.NamedNode("urn:tspace:canonical")
 
 
 def _skolem(node: object) -> OxTerm:
