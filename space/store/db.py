@@ -364,9 +364,11 @@ def log_quads(
 
 
 def _quads(quads: list[ox.Quad]) -> str:
-    return " ".join(
-        f"GRAPH {q.graph_name} {{ {q.subject} {q.predicate} {q.object} }}" for q in quads
-    )
+    """Return quads as GRAPH blocks, one per graph (a write's leases share theirs)."""
+    by_graph: dict[str, list[str]] = {}
+    for q in quads:
+        by_graph.setdefault(str(q.graph_name), []).append(f"{q.subject} {q.predicate} {q.object}")
+    return " ".join(f"GRAPH {g} {{ {' . '.join(ts)} }}" for g, ts in by_graph.items())
 
 
 def _block(g: ox.NamedNode, triples: Iterable[OxTriple]) -> str:
