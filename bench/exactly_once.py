@@ -52,6 +52,20 @@ class Proc:
         self.proc.wait(timeout=30)
 
 
+def wait_for_store(endpoint: str, deadline: float = 60.0) -> None:
+    """Wait until a store answers through the router at `endpoint`."""
+    end = time.monotonic() + deadline
+    while True:
+        try:
+            with TripleSpace.open(endpoint, space="ping") as ts:
+                ts.snapshot(timeout=2)
+            return
+        except SpaceError:
+            if time.monotonic() > end:
+                raise
+            time.sleep(0.1)
+
+
 def taker(endpoint: str, space: str, items: int, taken: list[int], done: list[int]) -> None:
     with TripleSpace.open(endpoint, space=space, agent="taker") as ts:
         order = list(range(items))
@@ -110,6 +124,7 @@ def main() -> None:
         store = Proc(Path(tmp) / "data", args.old, "--connect", edge.endpoint)
         store.start()
         try:
+            wait_for_store(edge.endpoint)
             started = time.monotonic()
             totals = [0, 0]
             for r in range(args.rounds):

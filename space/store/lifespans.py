@@ -30,16 +30,24 @@ import heapq
 import itertools
 import logging
 import time
+import uuid
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 from urllib.parse import quote, unquote
 
 import pyoxigraph as ox
 
 from space.store.db import StoreDB
+from space.store.intake import WriteRequest
 from space.store.oxterms import OxTriple
+
+if TYPE_CHECKING:
+    from space.store.state import Net, SpaceState
 
 log = logging.getLogger("tspace.store")
 
 LEASE = "urn:tspace:lease:"
+EXPIRY_AGENT = "tspace-store"  # the agent of the changesets retracting expired writes
 BUDGET = 256  # triples retracted per writer turn at most (a bigger write expires whole)
 
 _Group = tuple[str, float, str]  # space, expiry (unix seconds), write id
@@ -153,6 +161,25 @@ class Leases:
         if not held:
             del self._groups[group]
         self._changes[_quad(group, t)] = False
+
+
+def retractions(
+    leases: Leases, space: Callable[[str], SpaceState], stamp: Callable[[], str], now: float
+) -> list[tuple[SpaceState, Net | None]]:
+    """Decide one changeset per write expired by `now`, retracting what it still leased.
+
+    Each is attributed to the store (`EXPIRY_AGENT`) and names the expired
+    write as its `cause`. Writer thread only; the caller commits them.
+    """
+    decided = []
+    for (name, _expires, request), triples in leases.due(now):
+        state = space(name)
+        write = WriteRequest(
+            id=uuid.uuid4().hex, agent=EXPIRY_AGENT, cause=request, removed=triples
+        )
+        net, _ = state.decide(write, stamp())
+        decided.append((state, net))
+    return decided
 
 
 def _quad(group: _Group, t: OxTriple) -> ox.Quad:

@@ -18,9 +18,7 @@ import logging
 import queue
 import threading
 import time
-import uuid
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
 import zenoh
@@ -30,44 +28,20 @@ from space.changeset import pack, unpack
 from space.errors import MalformedPayload, QueryError, SpaceError
 from space.store import intake, queries
 from space.store.acks import AckGate
-from space.store.db import CommitFailed, StoreDB
+from space.store.db import StoreDB
 from space.store.lifespans import Leases
 from space.store.publish import Publisher
 from space.store.readers import Readers
 from space.store.replica import Replica
 from space.store.roles import Roles
-from space.store.state import Net, SpaceState
+from space.store.state import SpaceState
+from space.store.writer import Pending, Request, Writer, answer, reject
 
 log = logging.getLogger("tspace.store")
 
 _BATCH = 256
 HEARTBEAT = 0.5  # seconds between publications of each space's sequence number
-PROBE = 2.0  # seconds between attempts to commit again after a failed commit
 _READS = ("query", "log", "keys")
-EXPIRY_AGENT = "tspace-store"  # the agent of the changesets retracting expired writes
-
-
-class SpaceLimit(SpaceError):
-    """A write would create a space beyond the store's `--max-spaces`."""
-
-
-@dataclass
-class _Request:
-    kind: str  # a service, or "replica", "ack", "peer", "spaces", "state"
-    space: str
-    payload: bytes | None
-    query: zenoh.Query | None = None
-    key: str = ""
-
-
-@dataclass
-class _Pending:
-    """A write or take decided, waiting for its batch's commit to be answered."""
-
-    req: _Request
-    state: SpaceState
-    net: Net | None
-    reply: Callable[[Net | None], dict]
 
 
 class StoreServer:
@@ -96,11 +70,9 @@ class StoreServer:
         self.durable = durable
         self.root = root
         self.max_spaces = max_spaces
-        self.failed = ""  # why the last commit failed; writes are refused while set
-        self._queue: queue.SimpleQueue[_Request | None] = queue.SimpleQueue()
+        self._queue: queue.SimpleQueue[Request | None] = queue.SimpleQueue()
         self._spaces: dict[str, SpaceState] = {}
         self._acks = AckGate()
-        self._leases = Leases()
         self._roles = Roles(
             session,
             root,
@@ -114,7 +86,8 @@ class StoreServer:
         self._publisher = Publisher(session, root)
         self._db: StoreDB | None = None
         self._worker: threading.Thread | None = None
-        self._next_probe = 0.0
+        self._writer: Writer | None = None
+        self._leases = Leases()
 
     def start(self, timeout: float = 10.0) -> None:
         """Open the database, find the leader or lead, then serve.
@@ -128,8 +101,17 @@ class StoreServer:
         """
         self._db = StoreDB(self.data_dir, durable=self.durable, log_keep=self.log_keep)
         if self._db.open_error:
-            self.failed = self._db.open_error
-            log.error("%s: serving reads, refusing writes until it commits", self.failed)
+            log.error("%s: serving reads, refusing writes until it commits", self._db.open_error)
+        self._writer = Writer(
+            self.session,
+            self._db,
+            spaces=self._spaces,
+            space=self._space,
+            acks=self._acks,
+            publisher=self._publisher,
+            max_spaces=self.max_spaces,
+            leases=self._leases,
+        )
         self._leases.load(self._db)
         replica = Replica(self.session, self.root, self._db, self._space, self._forget)
         for name in self._db.spaces():
@@ -167,14 +149,14 @@ class StoreServer:
             key = str(query.key_expr)
             space = key.split("/")[1]
             payload = query.payload.to_bytes() if query.payload is not None else None
-            self._queue.put(_Request(kind, space, payload, query, key))
+            self._queue.put(Request(kind, space, payload, query, key))
 
         return callback
 
     def _on_sample(self, kind: str) -> Callable[[zenoh.Sample], None]:
         def callback(sample: zenoh.Sample) -> None:
             space = str(sample.key_expr).split("/")[1]
-            self._queue.put(_Request(kind, space, sample.payload.to_bytes()))
+            self._queue.put(Request(kind, space, sample.payload.to_bytes()))
 
         return callback
 
@@ -182,7 +164,7 @@ class StoreServer:
         def callback(sample: zenoh.Sample) -> None:
             zid = str(sample.key_expr).rsplit("/", 1)[1]
             alive = sample.kind == zenoh.SampleKind.PUT
-            self._queue.put(_Request("peer", what, pack([zid, alive])))
+            self._queue.put(Request("peer", what, pack([zid, alive])))
 
         return callback
 
@@ -195,15 +177,15 @@ class StoreServer:
             self._roles.retry()
             if time.monotonic() >= next_beat:
                 self._heartbeat()
-                self._probe()
+                self._writer.probe(self._readers.running)
                 next_beat = time.monotonic() + HEARTBEAT
-            batch: list[_Request] = []
+            batch: list[Request] = []
             wait = min(next_beat - time.monotonic(), self._expiry_wait())
             held = self._acks.wait_time()
             try:
                 item = self._queue.get(timeout=max(0.0, wait if held is None else min(wait, held)))
             except queue.Empty:
-                item = _Request("tick", "", None)
+                item = Request("tick", "", None)
             while item is not None:
                 batch.append(item)
                 if len(batch) >= _BATCH:
@@ -217,156 +199,35 @@ class StoreServer:
             if item is None:
                 return
 
-    def _handle(self, batch: list[_Request]) -> None:
-        pending: list[_Pending] = []
-        replicas: list[_Request] = []
-        self._expire(pending)
+    def _handle(self, batch: list[Request]) -> None:
+        pending: list[Pending] = []
+        replicas: list[Request] = []
+        if self._roles.role == "leading":
+            self._writer.expire(pending)
         for req in batch:
             if req.kind == "replica":
                 replicas.append(req)
                 continue
             try:
                 if req.kind == "write":
-                    self._write(req, pending)
+                    self._writer.write(req, pending)
                     continue
-                self._commit(pending)
+                self._writer.commit(pending)
                 pending = []
                 if req.kind == "query" and _op(req.payload) == "take":
-                    self._take(req, pending)
-                    self._commit(pending)
+                    self._writer.take(req, pending)
+                    self._writer.commit(pending)
                     pending = []
                 else:
                     self._other(req)
             except (SpaceError, ValueError) as exc:
-                self._reject(req, exc)
+                reject(req, exc)
             except Exception as exc:  # a bug must not stop the store nor leave a caller waiting
                 log.exception("store failed on a %s request for %r", req.kind, req.space)
-                self._reject(req, QueryError(f"internal error: {type(exc).__name__}: {exc}"))
-        self._commit(pending)
+                reject(req, QueryError(f"internal error: {type(exc).__name__}: {exc}"))
+        self._writer.commit(pending)
         if replicas:
             self._roles.follow([(r.space, r.payload or b"") for r in replicas])
-
-    def _writable(self, name: str) -> SpaceState:
-        """Return the state of a space about to be written, creating it within the limit."""
-        keys.check_space(name)
-        if self.failed:
-            raise CommitFailed(
-                f"not applied: the store refuses writes since a commit failed ({self.failed}); "
-                "it retries every few seconds"
-            )
-        if name not in self._spaces and len(self._spaces) >= self.max_spaces:
-            raise SpaceLimit(
-                f"not applied: this store holds at most {self.max_spaces} spaces "
-                "(tspace serve --max-spaces)"
-            )
-        return self._space(name)
-
-    def _write(self, req: _Request, pending: list[_Pending]) -> None:
-        write = intake.write_request(req.payload or b"")
-        state = self._writable(req.space)
-        if any(p.state is state and p.net and p.net.entry.request == write.id for p in pending):
-            self._reply_later(req, state, pending, write.id)
-            return
-        done = self._db_().outcome(state.name, write.id) if write.id else None
-        if done is not None:
-            again: dict = {"id": write.id, "seq": done[0], "again": True}
-            if done[2]:
-                again["dropped"] = unpack(done[2])
-            self._answer(req, again)
-            return
-        net, dropped = state.decide(write, write.ts or str(self.session.new_timestamp()))
-        if net is not None and dropped:
-            net.entry.dropped = pack(dropped)  # a retry is told the same
-
-        def reply(net: Net | None) -> dict:
-            ack: dict = {"id": write.id, "seq": net.entry.seq if net else state.seq}
-            if dropped:
-                ack["dropped"] = dropped
-            return ack
-
-        pending.append(_Pending(req, state, net, reply))
-
-    def _reply_later(
-        self, req: _Request, state: SpaceState, pending: list[_Pending], ident: str
-    ) -> None:
-        """Answer a request sent twice within one batch with the first one's outcome."""
-        first = next(p for p in pending if p.net and p.net.entry.request == ident)
-        pending.append(
-            _Pending(req, state, None, lambda _n: {**first.reply(first.net), "again": True})
-        )
-
-    def _take(self, req: _Request, pending: list[_Pending]) -> None:
-        take = intake.query_request(req.payload or b"")
-        keys.check_space(req.space)
-        if req.space not in self._spaces:
-            self._answer(req, {"seq": 0, keys.ASSERTED: []})  # nothing to take; create nothing
-            return
-        state = self._writable(req.space)
-        if take.id:
-            done = self._db_().outcome(state.name, take.id)
-            if done is not None:
-                removed = unpack(done[1]).get("del") or []  # type: ignore[union-attr]
-                self._answer(req, {"seq": done[0], keys.ASSERTED: removed, "again": True})
-                return
-        found = list(self._db_().match(state.name, "t", take.template))
-        write = intake.WriteRequest(id=take.id or uuid.uuid4().hex, agent=take.agent, removed=found)
-        net, _ = state.decide(write, take.ts or str(self.session.new_timestamp()))
-
-        def reply(net: Net | None) -> dict:
-            if net is None:
-                return {"seq": state.seq, keys.ASSERTED: []}
-            return {"seq": net.entry.seq, keys.ASSERTED: net.texts[1]}
-
-        pending.append(_Pending(req, state, net, reply))
-
-    def _commit(self, pending: list[_Pending]) -> None:
-        """Commit a batch's changesets at once; then answer and publish, or fail every one."""
-        if not pending:
-            return
-        decided = [p for p in pending if p.net is not None]
-        try:
-            entries = [p.net.entry for p in decided]  # type: ignore[union-attr]
-            self._db_().commit(entries, self._leases.take_changes())
-        except CommitFailed as exc:
-            self._fail(exc, pending)
-            return
-        for p in pending:
-            p.state.settle()
-        for p in pending:
-            if p.req.query is None:
-                continue
-            seq = p.net.entry.seq if p.net else p.state.seq
-            ack = pack(p.reply(p.net))
-            if not self._acks.hold(p.state.name, seq, p.req.query, p.req.key, ack):
-                p.req.query.reply(p.req.key, ack)
-                p.req.query.drop()
-        self._publisher.publish([(p.state, p.net) for p in decided])  # type: ignore[misc]
-
-    def _fail(self, exc: CommitFailed, pending: list[_Pending]) -> None:
-        """Refuse writes from now on; forget what the batch decided; tell every writer."""
-        self.failed = str(exc)
-        self._next_probe = time.monotonic() + PROBE
-        log.error("%s: refusing writes until a commit works again", exc)
-        for name in {p.state.name for p in pending}:
-            self._spaces.pop(name, None)
-        for name in {p.state.name for p in pending}:
-            self._space(name)  # as the database has it, not as the failed batch would have
-        self._leases.load(self._db_())
-        for p in pending:
-            self._reject(p.req, CommitFailed(f"not applied: {exc}"))
-
-    def _probe(self) -> None:
-        """After a failed commit, try an empty one now and then; writes resume once one works."""
-        if not self.failed or time.monotonic() < self._next_probe or self._readers.running:
-            return
-        try:
-            self._db_().probe()
-        except CommitFailed as exc:
-            self._next_probe = time.monotonic() + PROBE
-            log.debug("commit still failing: %s", exc)
-            return
-        log.warning("the database commits again: writes are accepted again")
-        self.failed = ""
 
     def _heartbeat(self) -> None:
         """Publish each space's sequence number, so subscribers learn of changes they missed."""
@@ -376,19 +237,19 @@ class StoreServer:
             if state.seq:
                 self.session.put(keys.service_key(name, "seq", self.root), pack({"seq": state.seq}))
 
-    def _other(self, req: _Request) -> None:
+    def _other(self, req: Request) -> None:
         if req.kind == "peer":
             self._roles.peer(req.space, *unpack(req.payload or b""))  # type: ignore[misc]
         elif req.kind == "ack":
             self._ack(req.payload or b"")
         elif req.kind == "spaces":
-            self._answer(req, self._seqs())
+            answer(req, self._seqs())
         elif req.kind == "state":
-            self._answer(req, self._copy(unpack(req.payload or b"")))
+            answer(req, self._copy(unpack(req.payload or b"")))
         elif req.kind in _READS:
             self._read(req)
 
-    def _read(self, req: _Request) -> None:
+    def _read(self, req: Request) -> None:
         """Hand a read to a reader thread: it starts after every write queued before it."""
         assert req.query is not None
         db, root = self._db_(), self.root
@@ -422,11 +283,6 @@ class StoreServer:
             n for n in self._spaces if selector.intersects(zenoh.KeyExpr(f"{self.root}/{n}/**"))
         ]
 
-    def _answer(self, req: _Request, reply: dict) -> None:
-        if req.query is not None:
-            req.query.reply(req.key, pack(reply))
-            req.query.drop()
-
     def _copy(self, request: object) -> dict:
         """Return a space whole, for a follower whose own copy cannot be continued."""
         if not isinstance(request, dict) or not isinstance(request.get("space"), str):
@@ -448,17 +304,6 @@ class StoreServer:
         self._spaces.pop(name, None)
         gc.unfreeze()  # frozen at start (space.heap), the old state could never be freed
 
-    def _reject(self, req: _Request, exc: Exception) -> None:
-        what = (
-            "rejected"
-            if isinstance(exc, QueryError | CommitFailed | SpaceLimit)
-            else "malformed, skipped:"
-        )
-        log.warning("%s %s on space %r: %s", what, req.kind, req.space[:80], exc)
-        if req.query is not None:
-            req.query.reply_err(str(exc).encode())
-            req.query.drop()
-
     def _db_(self) -> StoreDB:
         assert self._db is not None
         return self._db
@@ -470,26 +315,12 @@ class StoreServer:
             state.leases = self._leases
         return state
 
-    # Expiry: an ordinary changeset per expired write, decided here, in the writer's turn.
-
     def _expiry_wait(self) -> float:
-        """Return the seconds until the next lease expires (a long time if none or not leading)."""
+        """Return the seconds until the next lease expires (a heartbeat if none or following)."""
         due = self._leases.next_due()
-        if due is None or self._roles.role != "leading" or self.failed:
+        if due is None or self._roles.role != "leading":
             return HEARTBEAT
         return max(0.0, due - time.time())
-
-    def _expire(self, pending: list[_Pending]) -> None:
-        """Decide the retraction of each write whose lifespan ran out (a bounded number a turn)."""
-        if self._roles.role != "leading" or self.failed:
-            return
-        for (space, _expires, request), triples in self._leases.due(time.time()):
-            state = self._space(space)
-            write = intake.WriteRequest(
-                id=uuid.uuid4().hex, agent=EXPIRY_AGENT, cause=request, removed=triples
-            )
-            net, _ = state.decide(write, str(self.session.new_timestamp()))
-            pending.append(_Pending(_Request("expire", space, None), state, net, lambda _n: {}))
 
     # What this store serves in each role (declared by `Roles`, on the worker).
 

@@ -1,0 +1,247 @@
+"""The store's writer: decide writes and takes, commit them in batches, answer, publish.
+
+Writer thread only. A write or take is decided (`state.py`) into a `Pending`;
+a batch of them is committed at once (`db.py`), then each is answered (held
+for followers by the `AckGate` if there are any) and published. A commit that
+fails makes the store fail-stop: every write is refused until `probe` finds
+the database committing again (docs/store.md).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import zenoh
+
+from space import keys
+from space.changeset import pack, unpack
+from space.errors import QueryError, SpaceError
+from space.store import intake
+from space.store.acks import AckGate
+from space.store.db import CommitFailed, StoreDB
+from space.store.lifespans import Leases, retractions
+from space.store.publish import Publisher
+from space.store.state import Net, SpaceState
+
+log = logging.getLogger("tspace.store")
+
+PROBE = 2.0  # seconds between attempts to commit again after a failed commit
+
+
+class SpaceLimit(SpaceError):
+    """A write would create a space beyond the store's `--max-spaces`."""
+
+
+@dataclass
+class Request:
+    kind: str  # a service, or "replica", "ack", "peer", "spaces", "state"
+    space: str
+    payload: bytes | None
+    query: zenoh.Query | None = None
+    key: str = ""
+
+
+@dataclass
+class Pending:
+    """A write or take decided, waiting for its batch's commit to be answered."""
+
+    req: Request
+    state: SpaceState
+    net: Net | None
+    reply: Callable[[Net | None], dict]
+
+
+class Writer:
+    """Decide, commit, answer and publish writes and takes; refuse them after a failed commit.
+
+    Args:
+        spaces: the server's loaded spaces, name -> state (read to check the limit).
+        space: returns a space's state, loading or creating it.
+    """
+
+    def __init__(
+        self,
+        session: zenoh.Session,
+        db: StoreDB,
+        *,
+        spaces: dict[str, SpaceState],
+        space: Callable[[str], SpaceState],
+        acks: AckGate,
+        publisher: Publisher,
+        max_spaces: int,
+        leases: Leases | None = None,
+    ) -> None:
+        self.session = session
+        self.db = db
+        self.failed = db.open_error  # why writes are refused ("": they are not)
+        self.max_spaces = max_spaces
+        self._spaces = spaces
+        self._space = space
+        self._acks = acks
+        self._publisher = publisher
+        self._next_probe = 0.0
+        self._leases = leases
+
+    def _writable(self, name: str) -> SpaceState:
+        """Return the state of a space about to be written, creating it within the limit."""
+        keys.check_space(name)
+        if self.failed:
+            raise CommitFailed(
+                f"not applied: the store refuses writes since a commit failed ({self.failed}); "
+                "it retries every few seconds"
+            )
+        if name not in self._spaces and len(self._spaces) >= self.max_spaces:
+            raise SpaceLimit(
+                f"not applied: this store holds at most {self.max_spaces} spaces "
+                "(tspace serve --max-spaces)"
+            )
+        return self._space(name)
+
+    def write(self, req: Request, pending: list[Pending]) -> None:
+        write = intake.write_request(req.payload or b"")
+        state = self._writable(req.space)
+        if any(p.state is state and p.net and p.net.entry.request == write.id for p in pending):
+            self._reply_later(req, state, pending, write.id)
+            return
+        done = self.db.outcome(state.name, write.id) if write.id else None
+        if done is not None:
+            again: dict = {"id": write.id, "seq": done[0], "again": True}
+            if done[2]:
+                again["dropped"] = unpack(done[2])
+            answer(req, again)
+            return
+        net, dropped = state.decide(write, write.ts or str(self.session.new_timestamp()))
+        if net is not None and dropped:
+            net.entry.dropped = pack(dropped)  # a retry is told the same
+
+        def reply(net: Net | None) -> dict:
+            ack: dict = {"id": write.id, "seq": net.entry.seq if net else state.seq}
+            if dropped:
+                ack["dropped"] = dropped
+            return ack
+
+        pending.append(Pending(req, state, net, reply))
+
+    def _reply_later(
+        self, req: Request, state: SpaceState, pending: list[Pending], ident: str
+    ) -> None:
+        """Answer a request sent twice within one batch with the first one's outcome."""
+        first = next(p for p in pending if p.net and p.net.entry.request == ident)
+        pending.append(
+            Pending(req, state, None, lambda _n: {**first.reply(first.net), "again": True})
+        )
+
+    def take(self, req: Request, pending: list[Pending]) -> None:
+        take = intake.query_request(req.payload or b"")
+        keys.check_space(req.space)
+        if req.space not in self._spaces:
+            answer(req, {"seq": 0, keys.ASSERTED: []})  # nothing to take; create nothing
+            return
+        state = self._writable(req.space)
+        if take.id:
+            done = self.db.outcome(state.name, take.id)
+            if done is not None:
+                removed = unpack(done[1]).get("del") or []  # type: ignore[union-attr]
+                answer(req, {"seq": done[0], keys.ASSERTED: removed, "again": True})
+                return
+        found = list(self.db.match(state.name, "t", take.template))
+        write = intake.WriteRequest(id=take.id or uuid.uuid4().hex, agent=take.agent, removed=found)
+        net, _ = state.decide(write, take.ts or str(self.session.new_timestamp()))
+
+        def reply(net: Net | None) -> dict:
+            if net is None:
+                return {"seq": state.seq, keys.ASSERTED: []}
+            return {"seq": net.entry.seq, keys.ASSERTED: net.texts[1]}
+
+        pending.append(Pending(req, state, net, reply))
+
+    def commit(self, pending: list[Pending]) -> None:
+        """Commit a batch's changesets at once; then answer and publish, or fail every one."""
+        if not pending:
+            return
+        decided = [p for p in pending if p.net is not None]
+        try:
+            entries = [p.net.entry for p in decided]  # type: ignore[union-attr]
+            self.db.commit(
+                entries, self._leases.take_changes() if self._leases is not None else ([], [])
+            )
+        except CommitFailed as exc:
+            self._fail(exc, pending)
+            return
+        for p in pending:
+            p.state.settle()
+        for p in pending:
+            if p.req.query is None:
+                continue
+            seq = p.net.entry.seq if p.net else p.state.seq
+            ack = pack(p.reply(p.net))
+            if not self._acks.hold(p.state.name, seq, p.req.query, p.req.key, ack):
+                p.req.query.reply(p.req.key, ack)
+                p.req.query.drop()
+        self._publisher.publish([(p.state, p.net) for p in decided])  # type: ignore[misc]
+
+    def _fail(self, exc: CommitFailed, pending: list[Pending]) -> None:
+        """Refuse writes from now on; forget what the batch decided; tell every writer."""
+        self.failed = str(exc)
+        self._next_probe = time.monotonic() + PROBE
+        log.error("%s: refusing writes until a commit works again", exc)
+        for name in {p.state.name for p in pending}:
+            self._spaces.pop(name, None)
+        for name in {p.state.name for p in pending}:
+            self._space(name)  # as the database has it, not as the failed batch would have
+        if self._leases is not None:
+            self._leases.load(self.db)
+        for p in pending:
+            reject(p.req, CommitFailed(f"not applied: {exc}"))
+
+    def expire(self, pending: list[Pending]) -> None:
+        """Decide the retraction of each write whose lifespan ran out (`lifespans.py`)."""
+        if self.failed or self._leases is None:
+            return
+        stamp = lambda: str(self.session.new_timestamp())  # noqa: E731
+        for state, net in retractions(self._leases, self._space, stamp, time.time()):
+            pending.append(Pending(Request("expire", state.name, None), state, net, _no_reply))
+
+    def probe(self, busy: int) -> None:
+        """After a failed commit, try an empty one now and then; writes resume once one works.
+
+        `busy`: reads running; the database is reopened only while there are none.
+        """
+        if not self.failed or time.monotonic() < self._next_probe or busy:
+            return
+        try:
+            self.db.probe()
+        except CommitFailed as exc:
+            self._next_probe = time.monotonic() + PROBE
+            log.debug("commit still failing: %s", exc)
+            return
+        log.warning("the database commits again: writes are accepted again")
+        self.failed = ""
+
+
+def _no_reply(_net: Net | None) -> dict:
+    return {}
+
+
+def answer(req: Request, reply: dict) -> None:
+    """Reply to a request with a msgpack map (no-op for a fire-and-forget one)."""
+    if req.query is not None:
+        req.query.reply(req.key, pack(reply))
+        req.query.drop()
+
+
+def reject(req: Request, exc: Exception) -> None:
+    """Log a refused request and answer it with the error's sentence."""
+    what = (
+        "rejected"
+        if isinstance(exc, QueryError | CommitFailed | SpaceLimit)
+        else "malformed, skipped:"
+    )
+    log.warning("%s %s on space %r: %s", what, req.kind, req.space[:80], exc)
+    if req.query is not None:
+        req.query.reply_err(str(exc).encode())
+        req.query.drop()
