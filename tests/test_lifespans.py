@@ -128,3 +128,33 @@ def test_expiry_survives_kill_9(tmp_path) -> None:
             assert _held(ts, AC.a, AC.r) == {Literal("forever")}
     finally:
         srv.stop()
+
+
+def test_the_command_line_writes_with_a_lifespan_and_shows_it(ts, run_tspace, tmp_path) -> None:
+    doc = tmp_path / "reading.ttl"
+    doc.write_text(f"@prefix ac: <{AC_NS}> .\nac:r7 ac:battery 42 .\nac:r7 ac:name 'r7' .\n")
+    assert run_tspace("write", "--lifespan", "30s", str(doc)).returncode == 0
+    shown = run_tspace("query", "-t", "ac:r7 ?p ?o", "--with-lifespan")
+    assert shown.returncode == 0, shown.stderr
+    rows = [line.split() for line in shown.stdout.splitlines()[2:]]
+    assert len(rows) == 2 and all(25 < float(r[-1]) <= 30 for r in rows), shown.stdout
+    bad = run_tspace("write", "--lifespan", "soon", str(doc))
+    assert bad.returncode == 2 and "lifespan" in bad.stderr
+    assert run_tspace("write", "--lifespan", "0", str(doc)).returncode == 0  # permanent again
+    assert dict(ts.lifespans((AC.r7, None, None))) == {
+        (AC.r7, AC.battery, Literal(42)): None,
+        (AC.r7, AC.name, Literal("r7")): None,
+    }
+
+
+def test_a_launch_file_gives_an_agent_its_lifespan(tmp_path) -> None:
+    from space.launch import read_launch
+
+    path = tmp_path / "robot.toml"
+    path.write_text('[[agent]]\nname = "hw_monitor"\nlifespan = "10s"\n[[agent]]\nname = "hmi"\n')
+    hw, hmi = read_launch(path).agents
+    assert hw.option("--lifespan") == "10s"
+    assert hmi.option("--lifespan") is None
+    path.write_text('[[agent]]\nname = "hw_monitor"\nlifespan = "-1s"\n')
+    with pytest.raises(InputError, match="agent hw_monitor: a lifespan"):
+        read_launch(path)
