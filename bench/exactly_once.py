@@ -37,13 +37,15 @@ class Proc:
         self.cmd = [sys.executable, "-m", "space.cli", "serve", "--listen", self.endpoint]
         self.cmd += ["--data", str(data), *extra]
         self.code = code
+        self.log = data.parent / f"serve-{data.name}.log"
         self.proc: subprocess.Popen | None = None
 
     def start(self) -> None:
         """Start the process (not waiting for it)."""
-        self.proc = subprocess.Popen(
-            self.cmd, stderr=subprocess.DEVNULL, env=code_env(self.code), start_new_session=True
-        )
+        with open(self.log, "ab") as log:
+            self.proc = subprocess.Popen(
+                self.cmd, stderr=log, env=code_env(self.code), start_new_session=True
+            )
 
     def kill(self, sig: int = signal.SIGKILL) -> None:
         """Stop the process with `sig` and wait for it."""
@@ -137,6 +139,9 @@ def main() -> None:
                 f"{args.kills} kills a round: {totals[0]} lost, {totals[1]} taken twice "
                 f"({time.monotonic() - started:.0f} s)"
             )
+        except BaseException:
+            print(store.log.read_text(errors="replace")[-3000:], file=sys.stderr)
+            raise
         finally:
             store.kill(signal.SIGTERM)
             edge.kill(signal.SIGTERM)

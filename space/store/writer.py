@@ -115,8 +115,16 @@ class Writer:
             answer(req, again)
             return
         net, dropped = state.decide(write, write.ts or str(self.session.new_timestamp()))
-        if net is not None and dropped:
-            net.entry.dropped = pack(dropped)  # a retry is told the same
+        if dropped:
+            log.info(
+                "%s on %s: %d triple(s) not applied: %s",
+                write.id,
+                state.name,
+                len(dropped),
+                dropped,
+            )
+            if net is not None:
+                net.entry.dropped = pack(dropped)  # a retry is told the same
 
         def reply(net: Net | None) -> dict:
             ack: dict = {"id": write.id, "seq": net.entry.seq if net else state.seq}
