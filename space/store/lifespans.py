@@ -48,7 +48,7 @@ log = logging.getLogger("tspace.store")
 
 LEASE = "urn:tspace:lease:"
 EXPIRY_AGENT = "tspace-store"  # the agent of the changesets retracting expired writes
-BUDGET = 256  # triples retracted per writer turn at most (a bigger write expires whole)
+BUDGET = 64  # triples retracted per writer turn at most (a bigger write expires whole)
 
 _Group = tuple[str, float, str]  # space, expiry (unix seconds), write id
 
