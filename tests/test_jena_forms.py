@@ -86,6 +86,31 @@ def test_table_is_accepted_and_hide_hides_from_listings_but_not_from_rules():
     assert (EX.a, EX.secret, EX.b) not in set(e.graph)
 
 
+def test_hide_hides_every_triple_naming_the_node_as_jena_filters_its_answers():
+    # Jena's rdfs-fb-tgc and OWL rule sets hide rb:xsdBase: its own typing as a property
+    # (concluded by rules about properties) is as hidden as its uses as a predicate.
+    e = engine(
+        "-> hide(ex:secret).\n"
+        "[s: (?x ex:p ?y) -> (?x ex:secret ?y)]\n"
+        "[prop: (?x ?p ?y) -> (?p rdf:type rdf:Property)]\n"
+        "[about: (?x ex:p ?y) -> (?y ex:about ex:secret)]\n",
+        [(EX.a, EX.p, EX.b)],
+    )
+    assert (EX.p, RDF.type, RDF.Property) in e
+    assert (EX.secret, RDF.type, RDF.Property) not in e  # as a subject
+    assert (EX.b, EX.about, EX.secret) not in e  # as an object
+    assert not any(EX.secret in t for t in e.graph)
+    assert e.count() == len(set(e.graph))
+    assert not any(EX.secret in t for t in e.triples())
+
+
+def test_hidden_triples_are_not_reported_in_an_update():
+    e = engine("-> hide(ex:secret).\n[s: (?x ex:p ?y) -> (?x ex:secret ?y)]\n", [])
+    delta = e.apply(added=[(EX.a, EX.p, EX.b)])
+    assert [c.triple for c in delta.added] == [(EX.a, EX.p, EX.b)]
+    assert delta.inferred_added == ()
+
+
 def test_hidden_predicates_are_not_matched_either():
     e = engine(
         "-> hide(ex:secret).\n[s: (?x ex:p ?y) -> (?x ex:secret ?y)]\n", [(EX.a, EX.p, EX.b)]

@@ -58,6 +58,7 @@ class ChangeLog:
         by_rules: tuple[list[Triple], list[Triple]] = ([], [])
         inferred: tuple[list[Triple], list[Triple]] = ([], [])
         functors, triples, asserted = self._terms.functors, self._triples, self._asserted
+        hidden, shown = self._terms.hidden, self._terms.shown
         expected, decode = self._expected, self._terms.triple
         for t, (was_present, was_asserted) in self._before.items():
             is_present, is_asserted = t in triples, t in asserted
@@ -67,7 +68,7 @@ class ChangeLog:
             by_rule = is_asserted != expected.get(t, was_asserted)
             if is_present == was_present and is_asserted == was_asserted and not by_rule:
                 continue
-            if t[2] in functors:
+            if t[2] in functors or (hidden and not shown(t)):
                 continue
             triple = decode(t)
             if is_present != was_present:

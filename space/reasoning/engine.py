@@ -124,15 +124,17 @@ class RuleEngine:
 
     def count(self) -> int:
         """Return how many triples the state holds (asserted and inferred)."""
+        if self.terms.hidden:  # `hide` was called: count what is listed
+            return sum(1 for t in self._store if self.terms.shown(t))
         osp, functors = self._store.osp, self.terms.functors
-        hidden = sum(len(ps) for f in functors for ps in osp.get(f, {}).values())
-        return len(self._store) - hidden
+        unlisted = sum(len(ps) for f in functors for ps in osp.get(f, {}).values())
+        return len(self._store) - unlisted
 
     def triples(self, origin: Origin | None = None) -> Iterator[Triple]:
         """Yield the current triples, or only the asserted or only the inferred ones."""
-        functors, hidden = self.terms.functors, self._ctx.hidden
+        shown = self.terms.shown
         for t in self._store:
-            if t[2] in functors or t[1] in hidden or t[0] in functors:
+            if not shown(t):
                 continue
             if origin is None or (t in self._asserted) == (origin is Origin.ASSERTED):
                 yield self._decode(t)
@@ -149,16 +151,16 @@ class RuleEngine:
         ids = [None if x is None else self.terms.find(x) for x in pattern]
         if any(i is None and x is not None for i, x in zip(ids, pattern, strict=True)):
             return  # a term the engine never saw: nothing matches
-        functors, hidden = self.terms.functors, self._ctx.hidden
+        shown = self.terms.shown
         for t in self._store.match(*ids):
-            if t[2] not in functors and t[1] not in hidden and t[0] not in functors:
+            if shown(t):
                 yield self._decode(t)
 
     def __contains__(self, triple: object) -> bool:
         ids = tuple(self.terms.find(x) for x in triple) if isinstance(triple, tuple) else ()
         if len(ids) == 3 and ids[0] == ids[2] and ids[0] is not None and ids[1] == self._same:
             return self._in_state(ids[0])  # eq-ref, answered rather than stored
-        return len(ids) == 3 and ids in self._store
+        return len(ids) == 3 and ids in self._store and self.terms.shown(ids)  # type: ignore[arg-type]
 
     def _in_state(self, term: int) -> bool:
         store = self._store

@@ -59,8 +59,6 @@ class HybridEngine:
         self.backward = RuleEngine(
             [r for r in rules if r.backward], owl=False, terms=terms, **common
         )
-        # `hide` in either layer hides from what this engine lists.
-        self.backward._ctx.hidden = self.forward._ctx.hidden
         self.rules = (*self.forward.rules, *self.backward.rules)
         self.terms = terms
 
