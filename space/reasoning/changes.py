@@ -44,6 +44,11 @@ class ChangeLog:
         if t not in before:
             before[t] = _STATES[t in self._triples][t in self._asserted]
 
+    @property
+    def before(self) -> dict[T, tuple[bool, bool]]:
+        """Return, for each triple this update touched, (was present, was asserted); read only."""
+        return self._before
+
     def net(self) -> tuple[list[T], list[T]]:
         """Return the triples (functor-valued ones too) present now and not before, and back."""
         triples = self._triples
