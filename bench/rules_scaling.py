@@ -28,6 +28,11 @@ from space.heap import freeze_startup
 from space.reasoning import RuleEngine, parse_rules, read_graph
 from space.reasoning.builtins import default_registry
 
+try:  # the engine the reasoner agent builds (every rule form); older checkouts: RuleEngine
+    from space.reasoning import build_engine, engine_from_files
+except ImportError:
+    build_engine, engine_from_files = RuleEngine, RuleEngine.from_files  # type: ignore[assignment]
+
 ROOT = Path(__file__).resolve().parent.parent
 ONTOLOGY = ROOT / "ontology" / "selfconfig.ttl"
 ROBOT = ROOT / "ontology" / "robots" / "hospital.ttl"
@@ -54,9 +59,10 @@ def paper_rules(n: int) -> str:
 
 
 def prepared_engine(n: int) -> RuleEngine:
-    """Build and load an engine with n rules, the ontology and the paper's robot."""
+    """Build (as the reasoner agent does) and load an engine with n rules, the ontology and
+    the paper's robot."""
     rules = parse_rules(paper_rules(n), default_registry(), source=f"<{n} bench rules>")
-    engine = RuleEngine(rules, read_graph([ONTOLOGY]))
+    engine = build_engine(rules, read_graph([ONTOLOGY]))
     data = read_graph([ROBOT])
     for i in range(n):
         data.add((AC.robot1_base, AC[f"setting_{i}"], Literal("normal")))
@@ -123,9 +129,7 @@ def measure_load(runs: int) -> list[float]:
     robot = read_graph([ROBOT])
 
     def build() -> None:
-        RuleEngine.from_files(rules=[ROOT / "rules" / "paper.rules"], ontology=[ONTOLOGY]).load(
-            robot
-        )
+        engine_from_files(rules=[ROOT / "rules" / "paper.rules"], ontology=[ONTOLOGY]).load(robot)
 
     return [timed(build) for _ in range(runs)]
 

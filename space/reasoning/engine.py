@@ -132,9 +132,11 @@ class RuleEngine:
 
     def triples(self, origin: Origin | None = None) -> Iterator[Triple]:
         """Yield the current triples, or only the asserted or only the inferred ones."""
-        shown = self.terms.shown
+        functors, hidden = self.terms.functors, self.terms.hidden
         for t in self._store:
-            if not shown(t):
+            if t[2] in functors or t[0] in functors:
+                continue
+            if hidden and (t[0] in hidden or t[1] in hidden or t[2] in hidden):
                 continue
             if origin is None or (t in self._asserted) == (origin is Origin.ASSERTED):
                 yield self._decode(t)
@@ -151,16 +153,21 @@ class RuleEngine:
         ids = [None if x is None else self.terms.find(x) for x in pattern]
         if any(i is None and x is not None for i, x in zip(ids, pattern, strict=True)):
             return  # a term the engine never saw: nothing matches
-        shown = self.terms.shown
+        functors, hidden = self.terms.functors, self.terms.hidden  # as TermTable.shown, inlined
         for t in self._store.match(*ids):
-            if shown(t):
-                yield self._decode(t)
+            if t[2] in functors or t[0] in functors:
+                continue
+            if hidden and (t[0] in hidden or t[1] in hidden or t[2] in hidden):
+                continue
+            yield self._decode(t)
 
     def __contains__(self, triple: object) -> bool:
         ids = tuple(self.terms.find(x) for x in triple) if isinstance(triple, tuple) else ()
         if len(ids) == 3 and ids[0] == ids[2] and ids[0] is not None and ids[1] == self._same:
             return self._in_state(ids[0])  # eq-ref, answered rather than stored
-        return len(ids) == 3 and ids in self._store and self.terms.shown(ids)  # type: ignore[arg-type]
+        if len(ids) != 3 or ids not in self._store:
+            return False
+        return not self.terms.hidden or self.terms.shown(ids)  # type: ignore[arg-type]
 
     def _in_state(self, term: int) -> bool:
         store = self._store
