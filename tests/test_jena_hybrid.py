@@ -64,6 +64,7 @@ MIRRORED = (
     "[back: (?x ex:r ?y) <- (?x ex:q ?y)]\n"
     "[nested: (?x ex:kind ex:Tagged) -> [(?x ex:tag ?y) <- (?x ex:r ?y)]]\n"
     "[prod: (?x ex:q ?y), noValue(?x ex:seen ?y) -> (?x ex:seen ?y)]\n"
+    "[idle: (?x ex:idle ?y) <- (?x ex:q ?y), noValue(?x ex:tag ?y)]\n"
 )
 
 
@@ -133,3 +134,22 @@ def test_build_engine_runs_forward_rules_in_one_engine_and_backward_ones_in_two_
     assert isinstance(build_engine(backward, owl=False), HybridEngine)
     nested = parse_rules("[n: (?c <urn:k> ?d) -> [(?x <urn:q> ?d) <- (?x <urn:p> ?c)]]", registry)
     assert isinstance(build_engine(nested, owl=False), HybridEngine)
+
+
+def test_a_backward_rule_with_novalue_withdraws_its_conclusion_as_jena_asks_it_again():
+    rules = parse_rules(
+        "@prefix ex: <http://example.org/>.\n"
+        "[free: (?r ex:free ex:yes) <- (?r ex:kind ex:Robot), noValue(?r ex:busy)]\n"
+        "[f: (?r ex:at ?p) -> (?r ex:was ?p)]\n",
+        default_registry(),
+    )
+    engine = build_engine(rules, owl=False)
+    free = (EX.r, EX.free, EX.yes)
+    assert free in engine.load([(EX.r, EX.kind, EX.Robot)]).inferred_added
+    delta = engine.apply(added=[(EX.r, EX.busy, EX.task)])
+    assert free not in engine  # Jena's answer once ex:busy holds
+    assert delta.inferred_removed == (free,)
+    assert free in engine.apply(removed=[(EX.r, EX.busy, EX.task)]).inferred_added
+    engine.apply(removed=[(EX.r, EX.kind, EX.Robot)])  # a premise goes: the conclusion too
+    assert free not in engine
+    assert set(engine.triples()) == set()

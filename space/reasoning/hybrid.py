@@ -28,9 +28,10 @@ from space.reasoning.builtins import Registry, default_registry
 from space.reasoning.checks import mark_shared_names
 from space.reasoning.conflicts import Conflict
 from space.reasoning.delta import Delta, Origin, TripleChange, Why
-from space.reasoning.engine import RuleEngine, read_graph
+from space.reasoning.engine import RuleEngine
 from space.reasoning.errors import RuleLoopError
 from space.reasoning.parser import load_rules
+from space.reasoning.rdffiles import read_graph
 from space.reasoning.rules import Rule
 from space.reasoning.terms import TermTable
 from space.reasoning.triples import T
