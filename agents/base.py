@@ -25,7 +25,16 @@ from rdflib import URIRef
 from rdflib.term import Node
 
 from agents.view import AC, RECORD_PREFIX, View
-from space import Change, SpaceError, SpaceTimeout, SpaceUnavailable, Subscription, TripleSpace
+from space import (
+    Change,
+    InputError,
+    SpaceError,
+    SpaceTimeout,
+    SpaceUnavailable,
+    Subscription,
+    TripleSpace,
+    check_lifespan,
+)
 from space.cli.options import add_connect
 from space.heap import freeze_startup
 from space.presence import declare_agent
@@ -97,6 +106,8 @@ class Agent:
         self._subscription: Subscription | None = None
         self._inbox: queue.SimpleQueue[Change | None] = queue.SimpleQueue()
         self._stop = threading.Event()
+        self._leased: dict[tuple[Node, Node], Node] = {}  # values set, renewed while alive
+        self._next_renewal = 0.0
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -122,6 +133,7 @@ class Agent:
                         space=self.args.space,
                         agent=self.name,
                         config_file=self.args.config,
+                        lifespan=self.args.lifespan,
                     )
                     self._token = declare_agent(self.ts.session, self.ts.space, self.name)
                 self._subscription = self.subscribe()
@@ -170,6 +182,7 @@ class Agent:
                     change = None
             if self.started and (changed or time.monotonic() >= next_tick):
                 self._guarded(self.tick, "tick")
+                self._guarded(self._renew, "renewal")
                 next_tick = time.monotonic() + self.args.tick
             elif not self.started:
                 next_tick = time.monotonic() + self.args.tick
@@ -226,6 +239,12 @@ class Agent:
         """
         assert self.ts is not None
         added, removed = [], []
+        if self.args.lifespan:
+            for (s, p), o in values.items():
+                if o is None:
+                    self._leased.pop((s, p), None)
+                else:
+                    self._leased[(s, p)] = o
         for (s, p), o in values.items():
             old = self.view.objects(s, p)
             if o is not None and old == [o]:
@@ -243,6 +262,20 @@ class Agent:
             self.view.remove(added)
             self.view.add(removed)
             raise
+
+    def _renew(self) -> None:
+        """Write again, every third of `--lifespan`, the values this agent set and still holds.
+
+        So they live as long as the agent does, and expire a lifespan after it
+        dies or is cut off (the store retracts them; the rules see it).
+        """
+        if not self.args.lifespan or time.monotonic() < self._next_renewal:
+            return
+        assert self.ts is not None
+        self._next_renewal = time.monotonic() + self.args.lifespan / 3
+        held = [(s, p, o) for (s, p), o in self._leased.items() if o in self.view.objects(s, p)]
+        if held:
+            self.ts.write(held, timeout=self.args.timeout)
 
     # Hooks
 
@@ -283,9 +316,23 @@ def build_parser(cls: type[Agent]) -> argparse.ArgumentParser:
         metavar="SECONDS",
         help="how long to wait for a router and the store at start (default 30)",
     )
+    parser.add_argument(
+        "--lifespan",
+        type=_lifespan,
+        metavar="DURATION",
+        help="the values this agent writes expire DURATION (500ms, 5s, 2m) after it stops "
+        "renewing them, i.e. after it dies (default: permanent)",
+    )
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     cls.add_arguments(parser)
     return parser
+
+
+def _lifespan(text: str) -> float | None:
+    try:
+        return check_lifespan(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from exc
 
 
 def run_agent(cls: type[Agent], argv: Sequence[str] | None = None) -> int:

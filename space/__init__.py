@@ -15,6 +15,7 @@ from space.errors import (
     SpaceUnavailable,
     TemplateError,
 )
+from space.lifespan import check_lifespan
 from space.subscription import Change, Subscription
 from space.template import Template
 
@@ -37,4 +38,5 @@ __all__ = [
     "TemplateError",
     "Transaction",
     "TripleSpace",
+    "check_lifespan",
 ]

@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from space.cli.options import add_connect, open_space
-from space.errors import UsageError
+from space.errors import InputError, UsageError
 
 ORDER = 30
 
@@ -24,8 +24,24 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("file", nargs="?", metavar="FILE|-", help="Turtle document to add")
     p.add_argument("--remove", metavar="FILE|-", help="Turtle document whose triples to remove")
     p.add_argument("--strict", action="store_true", help="exit 1 when some triple was not applied")
+    p.add_argument(
+        "--lifespan",
+        type=_lifespan,
+        metavar="DURATION",
+        help="retract the added triples after DURATION (500ms, 5s, 2m, 1h) unless written "
+        "again; default: permanent",
+    )
     add_connect(p)
     p.set_defaults(func=run)
+
+
+def _lifespan(text: str) -> float:
+    from space.lifespan import check_lifespan
+
+    try:
+        return check_lifespan(text) or 0.0
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from exc
 
 
 def run(args: argparse.Namespace) -> int:
@@ -38,7 +54,9 @@ def run(args: argparse.Namespace) -> int:
     removed = read_turtle(args.remove) if args.remove else None
     with open_space(args, agent="tspace-write") as ts:
         cs = ts.changeset(
-            added if added is not None else (), removed if removed is not None else ()
+            added if added is not None else (),
+            removed if removed is not None else (),
+            lifespan=args.lifespan or 0,
         )
         ack = ts.send(cs, timeout=args.timeout, strict=False)
         print(ack, file=sys.stdout)
