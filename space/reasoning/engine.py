@@ -35,7 +35,7 @@ from space.reasoning.support import Support
 from space.reasoning.terms import TermTable
 from space.reasoning.triples import T, TripleStore
 from space.reasoning.view import live_graph
-from space.reasoning.withdraw import Withdrawals
+from space.reasoning.withdraw import Withdrawals, withdrawable
 from space.terms import Triple
 
 
@@ -82,7 +82,7 @@ class RuleEngine:
         self._compiled = [index.add(compiler, r, i) for i, r in enumerate([*runnable, *extra])]
         self._index = index
         # Backward rules with noValue: their conclusions go when no match holds (as Jena's).
-        held = [c.order for c in self._compiled if c.production and c.rule.backward]
+        held = [c.order for c in self._compiled if c.rule.backward and withdrawable(c)]
         self._withdrawals = Withdrawals(held) if held else None
         self._ontology = [self._encode(t) for t in tbox]
         self._asserted: set[T] = set()

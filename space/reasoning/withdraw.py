@@ -1,13 +1,15 @@
 """Withdraw what a backward rule with `noValue` concluded once no match of it holds.
 
 Jena answers a backward rule afresh at each query, so a conclusion resting on `noValue`
-(or `countLiteralValues`) goes as soon as the triple it waits the absence of appears.
+goes as soon as the triple it waits the absence of appears.
 Here a backward rule runs forward, and one with such a test runs as a production rule:
 its conclusion is asserted when it fires and would stay. This keeps, for each conclusion
 such a rule asserted, the matches that concluded it; after each update the engine
 retracts the conclusions none of whose matches holds any more (its triples gone, or a
-test false). That costs, per update, what such conclusions there are: few (Jena's OWL
-rule sets have a handful of such rules, the paper's rules none).
+test false); when the triple goes again, `noValue`'s wake-up fires the rule again. That
+costs, per update, what such conclusions there are: few (Jena's OWL rule sets have a
+handful of such rules, the paper's rules none). A rule with `countLiteralValues` is left
+as a production rule: nothing would fire it again when the count comes back.
 """
 
 from __future__ import annotations
@@ -19,6 +21,13 @@ from space.reasoning.compile import CompiledRule
 from space.reasoning.triples import T
 
 Match = tuple[CompiledRule, tuple[T, ...], tuple]
+
+
+def withdrawable(compiled: CompiledRule) -> bool:
+    """Tell whether a rule's conclusions can follow its matches: a production rule whose only
+    non-monotonic tests are `noValue` (which fires it again when they hold again)."""
+    guards = compiled.guards
+    return compiled.production and bool(guards) and all(b.name == "noValue" for b, _ in guards)
 
 
 class Withdrawals:
