@@ -124,3 +124,15 @@ def test_include_takes_a_file_url_relative_to_the_including_file(tmp_path):
     outer.write_text(HEAD + "@include <file:inner.rules>\n[outer: (?a ex:q ?b) -> (?a ex:p ?b)]\n")
     rules = load_rules([outer], REG)
     assert [r.name for r in rules] == ["inner", "outer"]  # included rules first, as in Jena
+
+
+def test_a_shared_name_labels_a_rule_with_a_numeric_constant_by_file_and_line_too():
+    rules = parse_rules(
+        HEAD + "[r: (?x ex:n 1) -> (?x ex:one ex:yes)]\n[r: (?x ex:p ?y) -> (?x ex:q ?y)]\n",
+        REG,
+        source="t.rules",
+        warn=lambda message: None,
+    )
+    e = RuleEngine(rules, owl=False)
+    e.load([(EX.a, EX.n, Literal(1))])
+    assert e.why((EX.a, EX.one, EX.yes)).rule == "r (t.rules:2)"  # type: ignore[union-attr]
