@@ -441,7 +441,7 @@ class TripleSpace:
         template: TemplateLike,
         callback: Callback,
         *,
-        snapshot: bool = False,
+        snapshot: bool | str = False,
         timeout: float = 5.0,
         skip_own: bool = False,
         scope: list[Scope] | None = None,
@@ -459,7 +459,9 @@ class TripleSpace:
         robot's agent does not even receive the rest of a fleet's traffic. The
         callback is then called once per (subject, predicate) part of a changeset
         (each with the changeset's id and seq), in store order per part; see
-        docs/wire-format.md.
+        docs/wire-format.md. Its snapshot holds the scope's state, or, with
+        `snapshot="all"`, everything matching `template` (the knowledge a robot's
+        agent reads once, whose changes do not concern it).
 
         Raises:
             SpaceUnavailable: no store answered (the sequence number is needed to fill gaps).
@@ -491,7 +493,7 @@ class TripleSpace:
                 reply = self._snapshot(t, timeout)
                 seq = int(reply.get("seq") or 0)
                 state = list(dict.fromkeys(_triples(reply)))
-                if isinstance(sub, ScopedSubscription):
+                if isinstance(sub, ScopedSubscription) and snapshot != "all":
                     state = [x for x in state if sub.selects(x)]
                 initial = Change(
                     agent="",

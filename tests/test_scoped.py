@@ -135,9 +135,22 @@ def test_a_part_key_does_not_change_when_the_space_learns_a_prefix(server, space
     with TripleSpace.open(server.endpoint, space=space_name, prefixes={"ac": AC_NS}) as ts:
         ts.write([(AC.robot1, RDF.type, AC.Robot)])
         with TripleSpace.open(server.endpoint, space=space_name, prefixes={"r1": ns}) as other:
-            other.write([(AC.robot1_base, RDF.type, AC.MobileBase)])  # r1:base in triple keys from now on
+            other.write(
+                [(AC.robot1_base, RDF.type, AC.MobileBase)]
+            )  # r1:base in triple keys
         seen = []
         ts.subscribe(None, seen.append, scope=SCOPE)
         ts.write([(AC.robot1_base, AC.motion_speed, Literal("low"))])
         wait_for(lambda: seen, what="the part keyed with the longer namespace")
         assert seen[0].added == [(AC.robot1_base, AC.motion_speed, Literal("low"))]
+
+
+def test_a_scoped_subscription_may_start_from_the_whole_state(ts):
+    ts.write([level(1, "normal"), level(2, "low")])
+    seen = []
+    ts.subscribe(None, seen.append, snapshot="all", scope=SCOPE)
+    ts.write([level(2, "full")])
+    ts.write([level(1, "low")])
+    wait_for(lambda: len(seen) >= 2, what="snapshot and robot1's change")
+    assert set(seen[0].added) == {level(1, "normal"), level(2, "low")}
+    assert [c.added for c in seen[1:]] == [[level(1, "low")]]
