@@ -145,8 +145,7 @@ class Agent:
         """Return the (subject, predicate) pairs this agent follows; None for the whole space."""
         if self.shared is None or not self.per_robot:
             return None
-        own = [(self.robot, None), (f"{self.robot}_*", None)]
-        return own + [(None, predicate) for predicate in self.shared]
+        return robot_scope(self.robot, self.shared)
 
     def subscribe(self) -> Subscription:
         """Subscribe to the space; the first change delivered is the snapshot.
@@ -333,6 +332,15 @@ class Agent:
 
     def tick(self) -> None:
         """Advance simulations and controllers; called every `--tick` seconds. Never blocks long."""
+
+
+def robot_scope(robot: URIRef, shared: Sequence[URIRef] = ()) -> list[tuple[object, object]]:
+    """Return the scope of a robot's agent: its robot, the robot's parts, `shared` predicates.
+
+    A robot's parts are named after it (`ac:robot7_battery`, as `agents.sim.fleet`
+    names the clones), which is what lets the router select them by key.
+    """
+    return [(robot, None), (f"{robot}_*", None), *((None, p) for p in shared)]
 
 
 def build_parser(cls: type[Agent], prog: str | None = None) -> argparse.ArgumentParser:

@@ -21,7 +21,7 @@ from space.errors import MalformedPayload
 from space.keys import escape
 from space.terms import to_nt
 
-HEADER = ("v", "id", "agent", "ts", "cause", "seq")  # what every part repeats of its changeset
+HEADER = ("v", "id", "agent", "ts", "cause", "seq", "lifespan")  # repeated in every part
 
 Part = dict  # a changeset map: the header of its changeset, the triples of one key
 PartKey = tuple[str, str]  # (subject chunk, predicate chunk)
