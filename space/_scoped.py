@@ -22,10 +22,10 @@ from rdflib import BNode, Literal, URIRef
 
 from space import keys
 from space._parts import Part, split, term_chunk
+from space._subscription import LATEST, Callback, Change, Dispatcher, Fetch, Subscription
 from space.changeset import Changeset, published_seq, unpack
 from space.errors import InputError, MalformedPayload, SpaceError
 from space.prefixes import PrefixMap
-from space.subscription import LATEST, Callback, Change, Dispatcher, Fetch, Subscription
 from space.template import Template
 from space.terms import Triple
 

@@ -21,7 +21,10 @@ from rdflib import Graph, URIRef
 from rdflib.query import Result
 
 from space import keys
+from space._request import Pending, ask_store
 from space._scoped import Scope, ScopedSubscription, selectors
+from space._session import open_session
+from space._subscription import Callback, Change, Dispatcher, Subscription
 from space.ack import Ack
 from space.changeset import Changeset, pack, unpack
 from space.errors import (
@@ -36,9 +39,6 @@ from space.errors import (
 from space.explanation import Explanation
 from space.lifespan import check_lifespan
 from space.prefixes import PrefixMap
-from space.request import Pending, ask_store
-from space.session import open_session
-from space.subscription import Callback, Change, Dispatcher, Subscription
 from space.template import Template
 from space.terms import CACHED, Triple, triple_from_nt
 

@@ -25,14 +25,14 @@ from typing import TYPE_CHECKING
 from rdflib import RDF, Graph, Literal
 from rdflib.term import Node
 
+from space._memory import BulkMemory
 from space.functional import declares_functional, replace_functional
-from space.memory import BulkMemory
 from space.terms import Triple
 
 if TYPE_CHECKING:
+    from space._subscription import Change, Subscription
     from space.changeset import Changeset
     from space.client import TripleSpace
-    from space.subscription import Change, Subscription
 
 # Which graph a triple is held for; a snapshot merges both, so its triples are "either".
 ASSERTED, INFERRED, EITHER = 1, 2, 4
