@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from rdflib import Literal, Namespace
+from rdflib import RDF, RDFS, Literal, Namespace
 
 from space.reasoning import (
     HybridEngine,
@@ -153,3 +153,17 @@ def test_a_backward_rule_with_novalue_withdraws_its_conclusion_as_jena_asks_it_a
     engine.apply(removed=[(EX.r, EX.kind, EX.Robot)])  # a premise goes: the conclusion too
     assert free not in engine
     assert set(engine.triples()) == set()
+
+
+def test_owl_rl_runs_in_the_forward_layer_and_builds_on_forward_rules_only():
+    ontology = [(EX.Sub, RDFS.subClassOf, EX.Super)]
+    rules = parse_rules(
+        "@prefix ex: <http://example.org/>.\n"
+        "[back: (?x rdf:type ex:Sub) <- (?x ex:tagged ex:b)]\n"
+        "[fwd: (?x ex:marked ex:f) -> (?x rdf:type ex:Sub)]\n",
+        default_registry(),
+    )
+    engine = build_engine(rules, ontology)
+    engine.load([(EX.a, EX.tagged, EX.b), (EX.c, EX.marked, EX.f)])
+    assert (EX.a, RDF.type, EX.Sub) in engine and (EX.c, RDF.type, EX.Super) in engine
+    assert (EX.a, RDF.type, EX.Super) not in engine  # as Jena's OWL rules in a hybrid set
