@@ -53,6 +53,10 @@ KNOWN["basics_rebind"] = (
     "Jena's plain forward engine keeps conclusions when a premise is removed (the test rebinds "
     "instead); here removing a premise retracts what it supported"
 )
+KNOWN["hybrid_nested_and_hide"] = (
+    "a rule nested in a head: Jena keeps the instance rule, and what it concludes, after its "
+    "parent's match goes (its second state); here they go with it"
+)
 KNOWN["bugs_empty_remove"] = (
     "remove(0) of a triple an axiom concludes: Jena deletes it (and what follows) once; here it "
     "keeps its derivation, so it stays"

@@ -167,3 +167,23 @@ def test_owl_rl_runs_in_the_forward_layer_and_builds_on_forward_rules_only():
     engine.load([(EX.a, EX.tagged, EX.b), (EX.c, EX.marked, EX.f)])
     assert (EX.a, RDF.type, EX.Sub) in engine and (EX.c, RDF.type, EX.Super) in engine
     assert (EX.a, RDF.type, EX.Super) not in engine  # as Jena's OWL rules in a hybrid set
+
+
+def test_a_backward_rule_counting_values_follows_the_count_as_jena_counts_again():
+    rules = parse_rules(
+        "@prefix ex: <http://example.org/>.\n"
+        "[many: (?x ex:many ex:yes) <- (?x ex:kind ex:R), countLiteralValues(?x, ex:v, ?n),"
+        " greaterThan(?n, 1)]\n",
+        default_registry(),
+    )
+    engine = build_engine(rules, owl=False)
+    many = (EX.a, EX.many, EX.yes)
+    engine.load([(EX.a, EX.kind, EX.R)])
+    engine.apply(added=[(EX.a, EX.v, Literal(1))])
+    assert many not in engine
+    delta = engine.apply(added=[(EX.a, EX.v, Literal(2))])  # the values come after the match
+    assert many in engine and delta.inferred_added == (many,)
+    delta = engine.apply(added=[(EX.a, EX.v, Literal(3))])  # 3 > 1 still: no change
+    assert many in engine and not delta.inferred_added and not delta.inferred_removed
+    engine.apply(removed=[(EX.a, EX.v, Literal(2)), (EX.a, EX.v, Literal(3))])
+    assert many not in engine

@@ -403,6 +403,10 @@ class RuleEngine:
             guards = compiled.guards
             if guards and any(b.run(ctx, args(bindings)) is None for b, args in guards):
                 continue
+            held = self._withdrawals
+            if held is not None and compiled.order in held.orders:
+                if held.known(compiled, premises, bindings):
+                    continue  # woken again on a match that concluded already
             agenda.count(compiled)
             fire(compiled, premises, bindings)
 

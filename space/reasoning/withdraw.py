@@ -6,10 +6,10 @@ Here a backward rule runs forward, and one with such a test runs as a production
 its conclusion is asserted when it fires and would stay. This keeps, for each conclusion
 such a rule asserted, the matches that concluded it; after each update the engine
 retracts the conclusions none of whose matches holds any more (its triples gone, or a
-test false); when the triple goes again, `noValue`'s wake-up fires the rule again. That
-costs, per update, what such conclusions there are: few (Jena's OWL rule sets have a
-handful of such rules, the paper's rules none). A rule with `countLiteralValues` is left
-as a production rule: nothing would fire it again when the count comes back.
+test false). The rule is woken again when its test may hold again: `noValue` when a
+triple goes, `countLiteralValues` (in a backward rule) when a counted triple comes or
+goes (`RuleIndex`). That costs, per update, what such conclusions there are: few (Jena's
+OWL rule sets have a handful of such rules, the paper's rules none).
 """
 
 from __future__ import annotations
@@ -23,11 +23,15 @@ from space.reasoning.triples import T
 Match = tuple[CompiledRule, tuple[T, ...], tuple]
 
 
+_WOKEN = frozenset({"noValue", "countLiteralValues"})  # tests that wake their rule again
+
+
 def withdrawable(compiled: CompiledRule) -> bool:
-    """Tell whether a rule's conclusions can follow its matches: a production rule whose only
-    non-monotonic tests are `noValue` (which fires it again when they hold again)."""
+    """Tell whether a backward rule's conclusions can follow its matches: a production rule
+    whose only non-monotonic tests wake it again when they may hold again (`noValue` on a
+    removal, `countLiteralValues` on any change of the counted values: `RuleIndex`)."""
     guards = compiled.guards
-    return compiled.production and bool(guards) and all(b.name == "noValue" for b, _ in guards)
+    return compiled.production and bool(guards) and all(b.name in _WOKEN for b, _ in guards)
 
 
 class Withdrawals:
@@ -54,6 +58,14 @@ class Withdrawals:
                 self._held[head].append(match)
             elif asserted_by.get(head) == by:
                 self._held[head] = [match]
+
+    def known(self, compiled: CompiledRule, premises: tuple[T, ...], bindings: tuple) -> bool:
+        """Tell whether this match of a held rule already concluded (a wake-up found it again)."""
+        return any(
+            m[0] is compiled and m[1] == premises and m[2] == bindings
+            for matches in self._held.values()
+            for m in matches
+        )
 
     def stale(self, triples: set[T], asserted: set[T], ctx: Context) -> list[T]:
         """Return the held conclusions no match of which holds now (and forget them)."""
