@@ -99,11 +99,13 @@ def lateness(ts: TripleSpace, probes: int) -> list[float]:
     return late
 
 
-def writes_during_mass_expiry(ts: TripleSpace, mass: int) -> tuple[list[float], list[float], float]:
+def writes_during_mass_expiry(
+    ts: TripleSpace, mass: int, per: int
+) -> tuple[list[float], list[float], float]:
     """Return write latencies (ms) with nothing expiring, then during a mass expiry; its span (s).
 
-    The mass is 100 changesets of `mass / 100` triples, written within a fraction of a
-    second with one lifespan, so they fall due together.
+    The mass is `mass / per` changesets of `per` triples, written with lifespans
+    that make them all fall due at one instant, some seconds after the last is sent.
     """
     quiet = [one_write(ts) for _ in range(300)]
     tag = uuid.uuid4().hex[:8]
@@ -116,18 +118,22 @@ def writes_during_mass_expiry(ts: TripleSpace, mass: int) -> tuple[list[float], 
 
     sub = ts.subscribe((None, mark, None), on_change)
     try:
-        life, per = 4.0, mass // 100
-        started = time.time()
+        due_at = time.time() + 3.0 + mass / per / 300  # 300 changesets/s: slower than this store
         pending = []
         for start in range(0, mass, per):
             rows = [
                 (URIRef(f"{EX}{tag}/{i}"), mark, URIRef(f"{EX}o{i}"))
                 for i in range(start, start + per)
             ]
+            life = due_at - time.time()
+            if life < 1.0:
+                raise SystemExit("writing the mass took too long for its lifespans: no figure")
             pending.append(ts.send_later(ts.changeset(rows, lifespan=life), timeout=60))
+            if len(pending) >= 64:
+                pending.pop(0).result()
         for p in pending:
             p.result()
-        while time.time() < started + life - 0.5:
+        while time.time() < due_at - 0.5:
             time.sleep(0.01)
         busy: list[float] = []
         deadline = time.time() + 30

@@ -32,6 +32,7 @@ import logging
 import time
 import uuid
 from collections.abc import Callable
+from functools import lru_cache
 from typing import TYPE_CHECKING
 from urllib.parse import quote, unquote
 
@@ -48,11 +49,16 @@ log = logging.getLogger("tspace.store")
 
 LEASE = "urn:tspace:lease:"
 EXPIRY_AGENT = "tspace-store"  # the agent of the changesets retracting expired writes
-BUDGET = 64  # triples retracted per writer turn at most (a bigger write expires whole)
+# One writer turn of expiries costs about BUDGET triples' worth of commit, a changeset
+# (its log entry, seq, publication) as much as CHANGESET triples: a write waiting
+# for the turn waits a few ms. A write leasing more expires whole, in one turn.
+BUDGET = 64
+CHANGESET = 16
 
 _Group = tuple[str, float, str]  # space, expiry (unix seconds), write id
 
 
+@lru_cache(maxsize=4096)
 def lease_graph(group: _Group) -> ox.NamedNode:
     """Return the graph holding the triples a write leased until its expiry."""
     space, expires, request = group
@@ -128,7 +134,9 @@ class Leases:
         return self._heap[0][0] if self._heap else None
 
     def due(self, now: float, budget: int = BUDGET) -> list[tuple[_Group, list[OxTriple]]]:
-        """Return the writes expired by `now` with their leased triples, about `budget` at most.
+        """Return the writes expired by `now` with their leased triples, about `budget` in cost.
+
+        Each write costs its triples plus `CHANGESET`; the first is returned whatever its size.
 
         Their leases are released here: the changesets retracting them are
         committed with the release of their lease quads.
@@ -141,7 +149,7 @@ class Leases:
             for t in triples:
                 self._release(group[0], t)
             found.append((group, triples))
-            count += len(triples)
+            count += len(triples) + CHANGESET
         return found
 
     def _lease(self, group: _Group, t: OxTriple) -> None:

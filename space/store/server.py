@@ -42,6 +42,7 @@ log = logging.getLogger("tspace.store")
 
 _BATCH = 256
 HEARTBEAT = 0.5  # seconds between publications of each space's sequence number
+OVERDUE = 0.02  # seconds late from which an expiry turn runs even while requests wait
 _READS = ("query", "log", "keys")
 
 
@@ -204,12 +205,12 @@ class StoreServer:
             self._acks.release()
             if item is None:
                 return
+            if self._queue.empty() or self._expiry_overdue():
+                self._sweep()
 
     def _handle(self, batch: list[Request]) -> None:
         pending: list[Pending] = []
         replicas: list[Request] = []
-        if self._roles.role == "leading":
-            self._writer.expire(pending)
         for req in batch:
             if req.kind == "replica":
                 replicas.append(req)
@@ -320,6 +321,27 @@ class StoreServer:
             state = self._spaces[name] = SpaceState(name, self._db_())
             state.leases = self._leases
         return state
+
+    def _sweep(self) -> None:
+        """Commit one turn of expiries on its own, between batches (writes never wait for more).
+
+        It runs when no request waits, or when expiries are late by `OVERDUE` (so a
+        steady stream of writes cannot hold them back for ever); one turn retracts
+        about `lifespans.BUDGET` triples, so a write arriving meanwhile waits for
+        that much at most.
+        """
+        if self._roles.role != "leading":
+            return
+        pending: list[Pending] = []
+        try:
+            self._writer.expire(pending)
+            self._writer.commit(pending)  # a failed commit: the writer refuses writes, says why
+        except Exception:  # a bug must not stop the store
+            log.exception("store failed sweeping expired writes")
+
+    def _expiry_overdue(self) -> bool:
+        due = self._leases.next_due()
+        return due is not None and due < time.time() - OVERDUE
 
     def _expiry_wait(self) -> float:
         """Return the seconds until the next lease expires (a heartbeat if none or following)."""
