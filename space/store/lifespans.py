@@ -38,6 +38,7 @@ from urllib.parse import quote, unquote
 
 import pyoxigraph as ox
 
+from space.lifespan import EXPIRY_AGENT
 from space.store.db import StoreDB
 from space.store.intake import WriteRequest
 from space.store.oxterms import OxTriple
@@ -48,7 +49,6 @@ if TYPE_CHECKING:
 log = logging.getLogger("tspace.store")
 
 LEASE = "urn:tspace:lease:"
-EXPIRY_AGENT = "tspace-store"  # the agent of the changesets retracting expired writes
 # One writer turn of expiries costs about BUDGET triples' worth of commit, a changeset
 # (its log entry, seq, publication) as much as CHANGESET triples: a write waiting
 # for the turn waits a few ms. A write leasing more expires whole, in one turn.
