@@ -6,12 +6,11 @@ import json
 import re
 import signal
 import time
-import urllib.request
 
 from agentprocs import HOSPITAL, value
 from rdflib import Literal, Namespace
 
-from conftest import AC_NS, free_port, wait_for
+from conftest import AC_NS, wait_for
 
 AC = Namespace(AC_NS)
 LIFE = 2.0  # the monitor's lifespan here (10 s in deploy/hospital.toml)
@@ -94,36 +93,3 @@ def test_why_with_lifespan_shows_what_each_fact_has_left(ts, launch, run_tspace)
     robot = next(p for p in tree["premises"] if p["text"] == "ac:robot1 rdf:type ac:Robot")
     assert robot["lifespan"] is None  # permanent
     assert tree["lifespan"] is None  # a production rule's conclusion is written permanent
-
-
-def _hmi_battery(port: int) -> dict | None:
-    """Return the freshness the HMI gives robot1's battery reading (None: none, or no page)."""
-    try:
-        with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/state", timeout=5) as reply:
-            robots = json.load(reply)["robots"]
-    except OSError:
-        return None
-    return next((r.get("battery_fresh") for r in robots if r["name"] == "robot1"), None)
-
-
-def test_the_hmi_shows_a_readings_life_and_since_when_it_is_stale(ts, launch) -> None:
-    launch.start("reasoner", "--robot-file", str(HOSPITAL))
-    wait_for(lambda: value(ts, AC.robot1, AC.current_task) == AC.task_idle, 30, "the robot")
-    port = free_port()
-    hmi = launch.start("hmi", "--http-port", str(port))
-    monitor = launch.start("hw_monitor", "--lifespan", f"{LIFE}s")
-    wait_for(lambda: (_hmi_battery(port) or {}).get("expires"), 30, "a leased reading", hmi.logs)
-    fresh = _hmi_battery(port)
-    assert fresh is not None and 0 < fresh["life"] <= LIFE
-    assert time.time() < fresh["expires"] / 1000 <= time.time() + LIFE
-
-    last = str(value(ts, AC.robot1_battery, AC.battery_level))
-    monitor.stop(signal.SIGKILL)
-    killed = time.time()
-    wait_for(lambda: (_hmi_battery(port) or {}).get("stale_since"), LIFE + 3, "stale", hmi.logs)
-    stale = _hmi_battery(port)
-    assert stale is not None and stale["last"] == last
-    assert killed < stale["stale_since"] / 1000 <= killed + LIFE + 3
-
-    monitor.start()
-    wait_for(lambda: (_hmi_battery(port) or {}).get("expires"), 30, "a fresh reading", hmi.logs)
