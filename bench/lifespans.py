@@ -124,7 +124,7 @@ def writes_during_mass_expiry(
         started = time.time()
         bulk(ts, 20 * per, per, None)
         pace = (time.time() - started) / 20
-        due_at = time.time() + 3.0 + 2 * pace * (mass / per)
+        due_at = time.time() + 3.0 + 3 * pace * (mass / per)
         pending = []
         for start in range(0, mass, per):
             rows = [

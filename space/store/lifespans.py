@@ -49,10 +49,12 @@ if TYPE_CHECKING:
 log = logging.getLogger("tspace.store")
 
 LEASE = "urn:tspace:lease:"
-# One writer turn of expiries costs about BUDGET triples' worth of commit, a changeset
-# (its log entry, seq, publication) as much as CHANGESET triples: a write waiting
-# for the turn waits a few ms. A write leasing more expires whole, in one turn.
+# A writer turn of expiries retracts about BUDGET triples' worth of commit, a changeset
+# (its log entry, seq, publication) costing as much as CHANGESET triples. While writes
+# come in, a turn is one expired write (BUSY), so a write waits for one at most. The
+# first write of a turn expires whole, whatever its size.
 BUDGET = 64
+BUSY = 1
 CHANGESET = 16
 
 _Group = tuple[str, float, str]  # space, expiry (unix seconds), write id
@@ -172,15 +174,21 @@ class Leases:
 
 
 def retractions(
-    leases: Leases, space: Callable[[str], SpaceState], stamp: Callable[[], str], now: float
+    leases: Leases,
+    space: Callable[[str], SpaceState],
+    stamp: Callable[[], str],
+    now: float,
+    budget: int = BUDGET,
 ) -> list[tuple[SpaceState, Net | None]]:
-    """Decide one changeset per write expired by `now`, retracting what it still leased.
+    """Decide one changeset per write expired by `now` (about `budget` in cost, see `due`).
+
+    Each retracts what its write still leased.
 
     Each is attributed to the store (`EXPIRY_AGENT`) and names the expired
     write as its `cause`. Writer thread only; the caller commits them.
     """
     decided = []
-    for (name, _expires, request), triples in leases.due(now):
+    for (name, _expires, request), triples in leases.due(now, budget):
         state = space(name)
         write = WriteRequest(
             id=uuid.uuid4().hex, agent=EXPIRY_AGENT, cause=request, removed=triples

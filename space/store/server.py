@@ -26,7 +26,7 @@ import zenoh
 from space import keys
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload, QueryError, SpaceError
-from space.store import intake, queries
+from space.store import intake, lifespans, queries
 from space.store.acks import AckGate
 from space.store.db import StoreDB
 from space.store.guard import WriteGuard, writer_of
@@ -43,6 +43,7 @@ log = logging.getLogger("tspace.store")
 _BATCH = 256
 HEARTBEAT = 0.5  # seconds between publications of each space's sequence number
 OVERDUE = 0.02  # seconds late from which an expiry turn runs even while requests wait
+BUSY = 0.05  # seconds after a request during which expiry turns are one write each
 _READS = ("query", "log", "keys")
 
 
@@ -92,6 +93,7 @@ class StoreServer:
         self._worker: threading.Thread | None = None
         self._writer: Writer | None = None
         self._leases = Leases()
+        self._busy_until = 0.0  # monotonic time until which requests are coming in
 
     def start(self, timeout: float = 10.0) -> None:
         """Open the database, find the leader or lead, then serve.
@@ -205,6 +207,8 @@ class StoreServer:
             self._acks.release()
             if item is None:
                 return
+            if batch[0].kind != "tick":
+                self._busy_until = time.monotonic() + BUSY
             if self._queue.empty() or self._expiry_overdue():
                 self._sweep()
 
@@ -326,15 +330,17 @@ class StoreServer:
         """Commit one turn of expiries on its own, between batches (writes never wait for more).
 
         It runs when no request waits, or when expiries are late by `OVERDUE` (so a
-        steady stream of writes cannot hold them back for ever); one turn retracts
-        about `lifespans.BUDGET` triples, so a write arriving meanwhile waits for
-        that much at most.
+        steady stream of writes cannot hold them back for ever). While requests come
+        in (one within `BUSY` s), a turn is one expired write, so a write arriving
+        meanwhile waits for that one's commit at most; else about `lifespans.BUDGET`
+        triples' worth, to sweep a mass expiry fast.
         """
         if self._roles.role != "leading":
             return
         pending: list[Pending] = []
+        busy = time.monotonic() < self._busy_until
         try:
-            self._writer.expire(pending)
+            self._writer.expire(pending, lifespans.BUSY if busy else lifespans.BUDGET)
             self._writer.commit(pending)  # a failed commit: the writer refuses writes, says why
         except Exception:  # a bug must not stop the store
             log.exception("store failed sweeping expired writes")
