@@ -56,6 +56,9 @@ LEASE = "urn:tspace:lease:"
 BUDGET = 64
 BUSY = 1
 CHANGESET = 16
+# Lease quads left behind by expiries, deleted a few at a time between writes (see `collect`).
+GARBAGE = 256  # a turn of them when no request comes in
+GARBAGE_BUSY = 16  # while requests come in
 
 _Group = tuple[str, float, str]  # space, expiry (unix seconds), write id
 
@@ -84,6 +87,10 @@ class Leases:
         self._heap: list[tuple[float, int, _Group]] = []
         self._order = itertools.count()
         self._changes: dict[ox.Quad, bool] = {}  # lease quads to insert (True) or delete
+        # Lease quads of triples retracted on expiry, still on disk: deleting them with the
+        # retraction would triple its commit, so `collect` deletes them later. A lease quad
+        # whose triple is not asserted means nothing (`load` skips it).
+        self.garbage: dict[tuple[str, OxTriple], _Group] = {}
 
     def __len__(self) -> int:
         return len(self._held)
@@ -98,7 +105,11 @@ class Leases:
             if group is None:
                 continue
             for q in db.store.quads_for_pattern(None, None, None, g):
-                self._lease(group, (q.subject, q.predicate, q.object))
+                t = (q.subject, q.predicate, q.object)
+                if db.has(group[0], "t", t):
+                    self._lease(group, t)
+                else:  # retracted on expiry, its lease quad not collected yet
+                    self.garbage[(group[0], t)] = group
         if self._held:
             log.info("%d leased triple(s) in %d write(s)", len(self._held), len(self._groups))
 
@@ -120,6 +131,9 @@ class Leases:
         group = (space, time.time() + lifespan, request) if lifespan else None
         for t in asserted:
             self._release(space, t)
+            stale = self.garbage.pop((space, t), None)
+            if stale is not None:  # asserted again: its old lease quad goes in this commit
+                self._changes[_quad(stale, t)] = False
             if group is not None:
                 self._lease(group, t)
                 self._changes[_quad(group, t)] = True
@@ -140,19 +154,32 @@ class Leases:
 
         Each write costs its triples plus `CHANGESET`; the first is returned whatever its size.
 
-        Their leases are released here: the changesets retracting them are
-        committed with the release of their lease quads.
+        Their leases are released here; their lease quads become `garbage`,
+        deleted later by `collect` (not with the retraction: that is its cost).
         """
         found: list[tuple[_Group, list[OxTriple]]] = []
         count = 0
         while count < budget and self.next_due() is not None and self._heap[0][0] <= now:
             group = heapq.heappop(self._heap)[2]
-            triples = list(self._groups.get(group, ()))
+            triples = list(self._groups.pop(group, ()))
             for t in triples:
-                self._release(group[0], t)
+                del self._held[(group[0], t)]
+                self.garbage[(group[0], t)] = group
             found.append((group, triples))
             count += len(triples) + CHANGESET
         return found
+
+    def collect(self, count: int) -> int:
+        """Queue the deletion of up to `count` garbage lease quads with the next commit.
+
+        Returns how many were queued.
+        """
+        taken = 0
+        while self.garbage and taken < count:
+            (_space, t), group = self.garbage.popitem()
+            self._changes[_quad(group, t)] = False
+            taken += 1
+        return taken
 
     def _lease(self, group: _Group, t: OxTriple) -> None:
         self._held[(group[0], t)] = group

@@ -342,6 +342,8 @@ class StoreServer:
         try:
             self._writer.expire(pending, lifespans.BUSY if busy else lifespans.BUDGET)
             self._writer.commit(pending)  # a failed commit: the writer refuses writes, says why
+            if not pending:  # nothing due: delete a few lease quads left by expiries
+                self._writer.collect(lifespans.GARBAGE_BUSY if busy else lifespans.GARBAGE)
         except Exception:  # a bug must not stop the store
             log.exception("store failed sweeping expired writes")
 
@@ -350,11 +352,16 @@ class StoreServer:
         return due is not None and due < time.time() - OVERDUE
 
     def _expiry_wait(self) -> float:
-        """Return the seconds until the next lease expires (a heartbeat if none or following)."""
-        due = self._leases.next_due()
-        if due is None or self._roles.role != "leading":
+        """Return the seconds until the next lease expires (a heartbeat if none or following).
+
+        No wait while lease quads left by expiries remain to delete (a turn of them each).
+        """
+        if self._roles.role != "leading":
             return HEARTBEAT
-        return max(0.0, due - time.time())
+        if self._leases.garbage and not self._writer.failed:
+            return 0.0
+        due = self._leases.next_due()
+        return HEARTBEAT if due is None else max(0.0, due - time.time())
 
     # What this store serves in each role (declared by `Roles`, on the worker).
 
