@@ -8,14 +8,17 @@ its expiry) loses its lease.
 
 On disk a lease is the triple itself in the graph
 `urn:tspace:lease:<space>:<expiry in ms>:<write id, percent-encoded>`, committed in
-the same SPARQL update as the changeset that decided it: after `kill -9` the
-leases are exactly those of the triples held, and `load` finds them again
-(those whose time passed during the outage are due at once).
+the same SPARQL update as the changeset that decided it. A lease quad counts
+only while its triple is asserted: an expiry leaves its lease quads behind
+(`garbage`, deleted later by `collect`: with the retraction they tripled its
+commit), and a triple asserted again has its old one deleted in that commit.
+After `kill -9`, `load` finds the leases of the triples held (those whose
+time passed during the outage are due at once).
 
 In memory, one group per leasing write (its triples still leased by it) in a
 heap by expiry time; `due` hands the writer thread the groups whose time has
-come, a bounded number of triples per turn, so a mass expiry is spread over
-turns and never holds the writes queued behind it. Each group becomes one
+come, a bounded cost per turn (one write while requests come in), so a mass
+expiry is spread over turns and never holds the writes queued behind it. Each group becomes one
 changeset retracting its triples, attributed to the store, naming the write
 that expired (`cause`). Because the expiry is an ordinary changeset decided
 by the one writer, a replicated log would order it like any other write (see
