@@ -193,6 +193,7 @@ def test_an_expired_lease_left_on_disk_never_leases_its_triple_again(tmp_path) -
         commit(net=net)
         assert not db.has("s", "t", t) and not db.has("s", "t", u)
         assert len(leases) == 0 and len(leases.garbage) == 2  # lease quads still on disk
+        assert leases.has_garbage("s") and not leases.has_garbage("other")
         after_restart = reloaded()
         assert len(after_restart) == 0 and len(after_restart.garbage) == 2
         assert after_restart.next_due() is None  # nothing to expire again
@@ -204,6 +205,6 @@ def test_an_expired_lease_left_on_disk_never_leases_its_triple_again(tmp_path) -
 
         assert leases.collect(10) == 1  # the last one, deleted in a commit of its own
         commit()
-        assert not leases.garbage and not reloaded().garbage
+        assert not leases.garbage and not reloaded().garbage and not leases.has_garbage("s")
     finally:
         db.close()

@@ -94,6 +94,24 @@ class Leases:
         # retraction would triple its commit, so `collect` deletes them later. A lease quad
         # whose triple is not asserted means nothing (`load` skips it).
         self.garbage: dict[tuple[str, OxTriple], _Group] = {}
+        self._garbage_in: dict[str, int] = {}  # space -> how many of `garbage` are its
+
+    def has_garbage(self, space: str) -> bool:
+        """Return whether a space has lease quads left to collect.
+
+        Any way of asserting triples other than `decide` (a fast path for plain
+        writes) must not be taken then: a triple asserted again must have its old
+        lease quad deleted in the same commit (`decide` does it).
+        """
+        return self._garbage_in.get(space, 0) > 0
+
+    def _discard(self, space: str, t: OxTriple, group: _Group) -> None:
+        """Make a lease quad garbage: its triple is retracted, the quad is still on disk."""
+        self.garbage[(space, t)] = group
+        self._garbage_in[space] = self._garbage_in.get(space, 0) + 1
+
+    def _collected(self, space: str) -> None:
+        self._garbage_in[space] -= 1
 
     def __len__(self) -> int:
         return len(self._held)
@@ -112,7 +130,7 @@ class Leases:
                 if db.has(group[0], "t", t):
                     self._lease(group, t)
                 else:  # retracted on expiry, its lease quad not collected yet
-                    self.garbage[(group[0], t)] = group
+                    self._discard(group[0], t, group)
         if self._held:
             log.info("%d leased triple(s) in %d write(s)", len(self._held), len(self._groups))
 
@@ -137,6 +155,7 @@ class Leases:
             stale = self.garbage.pop((space, t), None)
             if stale is not None:  # asserted again: its old lease quad goes in this commit
                 self._changes[_quad(stale, t)] = False
+                self._collected(space)
             if group is not None:
                 self._lease(group, t)
                 self._changes[_quad(group, t)] = True
@@ -167,7 +186,7 @@ class Leases:
             triples = list(self._groups.pop(group, ()))
             for t in triples:
                 del self._held[(group[0], t)]
-                self.garbage[(group[0], t)] = group
+                self._discard(group[0], t, group)
             found.append((group, triples))
             count += len(triples) + CHANGESET
         return found
@@ -179,8 +198,9 @@ class Leases:
         """
         taken = 0
         while self.garbage and taken < count:
-            (_space, t), group = self.garbage.popitem()
+            (space, t), group = self.garbage.popitem()
             self._changes[_quad(group, t)] = False
+            self._collected(space)
             taken += 1
         return taken
 
