@@ -354,6 +354,10 @@ def test_the_scenario_through_the_page_plots_the_battery_and_the_docking(page, d
     out = REPO / "bench" / "out"
     page.screenshot(out / "hmi-why-1024.png", 1024)
     page.click("#why-close")
+    # Then the timeline shows the docking, after the way to the dock (and so do the shots).
+    wait_for(lambda: "Docking" in task_spans(page), 60, "the docking on the timeline")
+    spans = task_spans(page)
+    assert spans.index("GoingToDock") < spans.index("Docking"), spans
     for width in (1024, 1920):
         page.screenshot(out / f"hmi-{width}.png", width)
         overflow = page.js("document.documentElement.scrollWidth - window.innerWidth")
