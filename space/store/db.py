@@ -200,15 +200,25 @@ class StoreDB:
         for q in self.store.quads_for_pattern(*pattern, graph(space, which)):
             yield q.subject, q.predicate, q.object
 
-    def commit(self, entries: list[Entry]) -> None:
+    def commit(
+        self,
+        entries: list[Entry],
+        extra: tuple[list[ox.Quad], list[ox.Quad]] = ([], []),
+    ) -> None:
         """Write a batch of changesets with their log entries and seqs, atomically.
+
+        `extra`: quads to delete and to insert in the same update (leases).
 
         Raises:
             CommitFailed: nothing of the batch was written.
         """
-        if not entries:
+        if not entries and not any(extra):
             return
-        text = " ;\n".join(op for e in entries for op in _operations(e))
+        ops = [op for e in entries for op in _operations(e)]
+        for verb, quads in zip(("DELETE", "INSERT"), extra, strict=True):
+            if quads:
+                ops.append(f"{verb} DATA {{ {_quads(quads)} }}")
+        text = " ;\n".join(ops)
         try:
             self.store.update(text)
             if self.durable:
@@ -351,6 +361,14 @@ def log_quads(
     if dropped:
         quads.append(ox.Quad(entry, DROPPED, ox.Literal(base64.b64encode(dropped).decode()), g))
     return quads
+
+
+def _quads(quads: list[ox.Quad]) -> str:
+    """Return quads as GRAPH blocks, one per graph (a write's leases share theirs)."""
+    by_graph: dict[str, list[str]] = {}
+    for q in quads:
+        by_graph.setdefault(str(q.graph_name), []).append(f"{q.subject} {q.predicate} {q.object}")
+    return " ".join(f"GRAPH {g} {{ {' . '.join(ts)} }}" for g, ts in by_graph.items())
 
 
 def _block(g: ox.NamedNode, triples: Iterable[OxTriple]) -> str:
