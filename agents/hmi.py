@@ -53,7 +53,6 @@ class Hmi(Agent):
     """Serve the HMI web page for every robot of the space."""
 
     kind = "hmi"
-    reads_records = True  # its "last rule firings" come from the changes
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)

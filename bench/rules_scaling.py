@@ -24,7 +24,7 @@ from pathlib import Path
 
 from rdflib import Literal, Namespace
 
-from space.heap import freeze_startup
+from space import freeze_startup
 from space.reasoning import RuleEngine, parse_rules, read_graph
 from space.reasoning.builtins import default_registry
 
@@ -76,7 +76,7 @@ def as_the_reasoner_runs() -> Iterator[None]:
     """Run the block with the garbage collector as the reasoner agent has it.
 
     The agent freezes what it built at start out of the collector's full walks
-    (`space.heap.freeze_startup`), then collects as usual: so here, after the
+    (`space._heap.freeze_startup`), then collects as usual: so here, after the
     engine is prepared. (A full collection before each timed call, as this bench
     did before, leaves the caches cold and adds 0.1 ms at 1 rule, 0.7 at 200.)
     """

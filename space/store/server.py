@@ -308,7 +308,7 @@ class StoreServer:
     def _forget(self, name: str) -> None:
         """Drop a space's state from memory (its database was replaced: `_space` reloads it)."""
         self._spaces.pop(name, None)
-        gc.unfreeze()  # frozen at start (space.heap), the old state could never be freed
+        gc.unfreeze()  # frozen at start (space._heap), the old state could never be freed
 
     def _db_(self) -> StoreDB:
         assert self._db is not None
