@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from rdflib import Graph, Literal, Namespace, URIRef
 
 from space.cli import main
 from space.reasoning import RuleSyntaxError, default_registry, load_rules
+from space.reasoning.parser import check_rules
 
 ROOT = Path(__file__).resolve().parents[1]
 AC = Namespace("https://w3id.org/tspace/selfconfig#")
@@ -158,3 +162,28 @@ def test_reason_reads_relative_iris_against_the_data_file(tmp_path, monkeypatch,
     state = Graph().parse(data=capsys.readouterr().out, format="turtle")
     base = tmp_path.as_uri()
     assert (URIRef(f"{base}/a"), URIRef(f"{base}/p"), URIRef(f"{base}/b")) in state
+
+
+PIECES = ["[", "]", "(", ")", "->", "<-", ".", "r:", "?a", "?b", "ac:p", "'x'", "'", ",", "\n"]
+PIECES += [
+    " ",
+    "zz:q",
+    "42",
+    "drop(0)",
+    "@prefix ac: <urn:x#>.\n",
+    "[n: (?a ac:p ?b) -> (?b ac:p ?a)]\n",
+]
+
+
+@settings(
+    max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(st.lists(st.sampled_from(PIECES), max_size=60))
+def test_the_checker_reads_any_text_to_its_end_and_locates_every_error(tmp_path, pieces):
+    path = tmp_path / "any.rules"
+    path.write_text("".join(pieces))
+    rules, errors = check_rules([path], default_registry(), warn=lambda message: None)
+    for error in errors:
+        assert re.match(rf"{re.escape(str(path))}:\d+:\d+: ", str(error)), str(error)
+    if "".join(pieces).count("[n: (?a ac:p ?b) -> (?b ac:p ?a)]\n") and not errors:
+        assert rules  # a well-formed rule among well-formed text is read
