@@ -14,7 +14,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "rules",
         help="check Jena rules files",
         description="Check rules files (with their @include files): syntax, builtins, arities, "
-        "drop/remove indices and head variables. Lists the rules when all is well.",
+        "drop/remove indices and head variables, and that the engine (the reasoner's, with "
+        "backward and nested rules) can run every rule. Lists the rules when all is well.",
     )
     actions = p.add_subparsers(dest="action", metavar="ACTION", required=True)
     check = actions.add_parser("check", help="check rules files and list their rules")
@@ -28,7 +29,7 @@ def run_check(args: argparse.Namespace) -> int:
     Each error is one line, `file:line:column: ...`; after an error the checker reads on
     from the end of the broken rule, so one run lists them all.
     """
-    from space.reasoning import default_registry
+    from space.reasoning import RuleError, build_engine, default_registry
     from space.reasoning.parser import check_rules
     from space.reasoning.rules import Call
 
@@ -36,11 +37,15 @@ def run_check(args: argparse.Namespace) -> int:
     errors = failed = 0
     for path in args.files:
         rules, found = check_rules([path], registry, warn=_warn)
-        for error in found:
-            print(error, file=sys.stderr)
         if not found and not rules:  # an empty file (or one of comments) is a mistake
             found = [f"{path}: no rules in it"]
-            print(found[0], file=sys.stderr)
+        elif not found:
+            try:
+                build_engine(rules, owl=False, registry=registry)  # what only compiling finds
+            except RuleError as exc:
+                found = [exc]
+        for error in found:
+            print(error, file=sys.stderr)
         if found:
             errors += len(found)
             failed += 1
@@ -49,6 +54,7 @@ def run_check(args: argparse.Namespace) -> int:
         for rule in rules:
             calls = [i for i in (*rule.body, *rule.head) if isinstance(i, Call)]
             kind = "production" if any(not c.builtin.monotonic for c in calls) else "monotonic"
+            kind = f"backward, {kind}" if rule.backward else kind
             print(f"  {rule.where}  {rule.label}  ({kind})")
     if errors > 1:
         print(
