@@ -218,3 +218,22 @@ def test_a_changeset_on_several_selected_keys_arrives_whole_with_one_id_and_seq(
     wait_for(lambda: sum(len(c.added) for c in seen) >= 2, what="both of robot1's parts")
     assert {(c.id, c.seq) for c in seen} == {(written, written.seq)}
     assert sorted(t for c in seen for t in c.added) == sorted(triples[:2])
+
+
+def test_a_robots_hw_monitor_hears_its_robot_and_the_site_not_the_fleet_nor_records(ts):
+    from agents.base import robot_scope
+    from agents.firings import FiringLog
+    from agents.hw_monitor import HwMonitor
+
+    seen = []
+    ts.subscribe(None, seen.append, scope=robot_scope(AC.robot1, HwMonitor.shared))
+    record, _dropped = FiringLog().record("some_rule", "cause-1", AC.robot1)
+    ts.write(record)  # the reasoner's record about robot1: not for its agents
+    ts.write([level(2, "low"), (AC.robot2, AC.location, AC.hall)])  # another robot's
+    ts.write([(AC.hall, AC.crowd_level, Literal("high"))])  # the site: its lasers see it
+    ts.write([level(1, "low")])
+    wait_for(lambda: len(seen) >= 2, what="the site's and robot1's changes")
+    assert [c.added for c in seen] == [
+        [(AC.hall, AC.crowd_level, Literal("high"))],
+        [level(1, "low")],
+    ]
