@@ -308,6 +308,9 @@ class Agent:
     def _surface_failed_writes(self) -> None:
         """Undo in the view, and log, each write the store did not take (the loop's thread)."""
         for failed in self.writes.failed():
+            if not failed.added and not failed.removed:  # a renewal (`_renew`): nothing to undo
+                self.log.warning("renewal %s not taken: %s", failed.id, failed.error)
+                continue
             self.log.warning("write %s not taken, undone in the view: %s", failed.id, failed.error)
             if all(t in self.view.graph for t in failed.added):
                 self.view.remove(failed.added)

@@ -1,6 +1,7 @@
 """The reasoner: the space's rules engine, answering each changeset with its conclusions.
 
-It holds the ontology and the rules (`space.reasoning.RuleEngine`), applies
+It holds the ontology and the rules (`space.reasoning.build_engine`: every Jena rule
+form, backward and nested rules in a second layer as Jena's hybrid mode), applies
 every changeset other agents write, and writes back one changeset naming its
 cause: what production rules changed (asserted) and what is entailed
 (inferred graph), plus a record of each rule firing (`agents.firings`). Its
@@ -52,10 +53,10 @@ from space import (
 )
 from space.reasoning import (
     Delta,
+    Engine,
     Explainer,
     Firing,
     Origin,
-    RuleEngine,
     RuleError,
     RuleLoopError,
     read_graph,
@@ -80,7 +81,7 @@ class Reasoner(Agent):
             self.name = args.name or f"{self.kind}.{local_name(self.robot)}"
             self.log = logging.getLogger(self.name)
             prefix += f"{local_name(self.robot)}_"
-        self.engine: RuleEngine | None = None
+        self.engine: Engine | None = None
         self.firings = FiringLog(args.keep_firings, prefix)
         self.conflicts = ConflictRecords()
         self.roster = Roster(self.name) if args.per_robot else None
@@ -167,7 +168,7 @@ class Reasoner(Agent):
 
     def _load(
         self,
-        engine: RuleEngine,
+        engine: Engine,
         asserted: list[Triple],
         inferred: list[Triple],
         seq: int,

@@ -36,7 +36,7 @@ from space.identity import Identity, load_identity
 from space.keys import ROOT as KEY_ROOT
 from space.keys import escape as escape_key_chunk
 from space.keys import unescape as unescape_key_chunk
-from space.lifespan import check_lifespan
+from space.lifespan import EXPIRY_AGENT, check_lifespan
 from space.mirror import ChangeRecord, SpaceMirror
 from space.prefixes import PrefixMap
 from space.presence import alive_agents, declare_agent, watch_agents
@@ -47,6 +47,7 @@ from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT, make_config
 
 __all__ = [
     "DEFAULT_ENDPOINT",
+    "EXPIRY_AGENT",
     "KEY_ROOT",
     "SECURE_ENDPOINT",
     "Ack",

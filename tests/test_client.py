@@ -278,9 +278,8 @@ def test_a_store_too_busy_to_answer_in_time_raises_space_timeout(ts):
     with pytest.raises(SpaceTimeout, match=r"no answer from the store to the query within 0\.05 s"):
         ts.query((AC.s0, None, None), timeout=0.05)  # queued behind that write
     # the query waits behind the late write: give it the deadline, not the 5 s default
-    wait_for(
-        lambda: len(ts.query((None, AC.n, None), timeout=30)) == len(big), 30, "the late write"
-    )
+    everything = (None, AC.n, None)
+    wait_for(lambda: len(ts.query(everything, timeout=30)) == len(big), 30, "the late write")
 
 
 def test_the_readme_python_example_runs_on_a_fresh_space(server, space_name):
