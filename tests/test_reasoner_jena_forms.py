@@ -35,7 +35,8 @@ def test_backward_and_nested_rules_in_a_rules_file_conclude_into_the_space(ts, l
     main = rules / "selfconfig.rules"
     main.write_text(main.read_text() + JENA_FORMS)
     agent = launch.start("reasoner", "--robot-file", str(HOSPITAL), "--rules", str(main))
-    wait_for(lambda: "loaded" in agent.logs())
+    # Its start (a Python process, Zenoh, the rules and ontology) is slow on a loaded machine.
+    wait_for(lambda: "loaded" in agent.logs(), 30, "the reasoner loaded", agent.logs)
 
     ts.write([(AC.robot1, EX.at, EX.dock), (EX.carries, EX.marksAs, EX.Carrier)])
     wait_for(lambda: inferred(ts, (AC.robot1, EX.near, EX.dock)))
@@ -60,11 +61,12 @@ def test_a_backward_rule_added_to_the_rules_file_is_loaded_without_a_restart(ts,
         "@prefix ex: <http://example.org/site#>.\n[f: (?r ex:at ?p) -> (?r ex:was ?p)]\n"
     )
     agent = launch.start("reasoner", "--robot-file", str(HOSPITAL), "--rules", str(rules))
-    wait_for(lambda: "loaded" in agent.logs())
+    # Its start (a Python process, Zenoh, the rules and ontology) is slow on a loaded machine.
+    wait_for(lambda: "loaded" in agent.logs(), 30, "the reasoner loaded", agent.logs)
     ts.write([(AC.robot1, EX.at, EX.dock)])
     wait_for(lambda: inferred(ts, (AC.robot1, EX.was, EX.dock)))
 
     rules.write_text(rules.read_text() + "[near: (?r ex:near ?p) <- (?r ex:at ?p)]\n")
-    wait_for(lambda: "rules reloaded" in agent.logs())
+    wait_for(lambda: "rules reloaded" in agent.logs(), 30, "the rules reloaded", agent.logs)
     wait_for(lambda: inferred(ts, (AC.robot1, EX.near, EX.dock)))
     assert inferred(ts, (AC.robot1, EX.was, EX.dock))
