@@ -32,6 +32,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="all",
         help="for templates: which graph (default all)",
     )
+    p.add_argument(
+        "--stale",
+        action="store_true",
+        help="cluster mode: answer from this replica even without a quorum (possibly behind) "
+        "instead of failing with 'no quorum'",
+    )
     add_connect(p, space=None)
     p.set_defaults(func=run)
 
@@ -43,6 +49,7 @@ def run(args: argparse.Namespace) -> int:
     if (args.sparql is None) == (args.template is None):
         raise UsageError("give either SPARQL text or --template")
     with open_space(args, agent="tspace-query") as ts:
+        ts.stale = args.stale
         prefixes = ts.load_prefixes(timeout=args.timeout)
         if args.template is not None:
             from space.template import Template

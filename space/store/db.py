@@ -200,15 +200,23 @@ class StoreDB:
         for q in self.store.quads_for_pattern(*pattern, graph(space, which)):
             yield q.subject, q.predicate, q.object
 
-    def commit(self, entries: list[Entry]) -> None:
+    def commit(self, entries: list[Entry], *, revision: int | None = None) -> None:
         """Write a batch of changesets with their log entries and seqs, atomically.
+
+        `revision`: a cluster replica's applied etcd revision, written in the
+        same update (`space.store.cluster_db`), so a restart resumes there.
 
         Raises:
             CommitFailed: nothing of the batch was written.
         """
-        if not entries:
+        if not entries and revision is None:
             return
-        text = " ;\n".join(op for e in entries for op in _operations(e))
+        ops = [op for e in entries for op in _operations(e)]
+        if revision is not None:
+            from space.store.cluster_db import revision_ops
+
+            ops += revision_ops(revision)
+        text = " ;\n".join(ops)
         try:
             self.store.update(text)
             if self.durable:
@@ -216,7 +224,7 @@ class StoreDB:
         except (OSError, RuntimeError) as exc:
             raise CommitFailed(f"the database could not commit: {exc}") from exc
         self._commits += len(entries)
-        if self._commits >= 1000:
+        if self._commits >= 1000 and entries:
             self._commits = 0
             self._compact({e.space: e.seq for e in entries})
 

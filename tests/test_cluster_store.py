@@ -1,0 +1,144 @@
+"""Three `tspace serve --cluster` replicas on a real 3-member etcd cluster.
+
+Each replica runs its own Zenoh router, not meshed with the others: whatever
+one replica learns of another's writes came through etcd. A writer on one
+replica reads its write on another; two takers on two replicas race for the
+same items and each item is taken once; a replica whose side has lost the
+majority refuses writes and reads with "no quorum: 1 of 3 members reachable",
+and answers a read that asks for possibly stale answers.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from rdflib import Literal, URIRef
+
+from conftest import Server, tspace_cmd, wait_for
+from space import TripleSpace
+from space.errors import NoQuorum, SpaceError
+
+EX = "http://example.org/"
+
+
+@pytest.fixture
+def replicas(etcd_cluster, tmp_path: Path) -> Iterator[list[Server]]:
+    """Three replicas of one etcd cluster, each behind its own router."""
+    members = ",".join(etcd_cluster.endpoints)
+    servers = [Server(tmp_path / f"r{i}" / "data", "--cluster", members) for i in range(3)]
+    for s in servers:
+        s.data_dir.parent.mkdir(parents=True)
+        s.start(wait=False)
+    try:
+        for s in servers:
+            wait_for(s.reachable, 30, f"replica on {s.endpoint}", s.logs)
+        yield servers
+    finally:
+        for s in servers:
+            s.stop()
+
+
+def _open(server: Server, space: str) -> TripleSpace:
+    return TripleSpace.open(server.endpoint, space=space, agent="test")
+
+
+def _s(n: int) -> URIRef:
+    return URIRef(f"{EX}item{n}")
+
+
+def test_a_write_on_one_replica_is_read_on_another(replicas: list[Server]) -> None:
+    with _open(replicas[0], "fleet") as a, _open(replicas[2], "fleet") as c:
+        ack = a.write([(_s(1), URIRef(EX + "at"), Literal("dock"))])
+        assert ack.seq == 1
+        # acknowledged means committed by a majority: the read on another replica sees it
+        assert (_s(1), URIRef(EX + "at"), Literal("dock")) in c.query((None, None, None))
+        ack = c.write([(_s(2), URIRef(EX + "at"), Literal("hall"))])
+        assert ack.seq == 2  # every replica numbers the space's changesets alike
+        assert len(a.query((None, URIRef(EX + "at"), None))) == 2
+
+
+def test_a_take_raced_on_two_replicas_wins_once(replicas: list[Server]) -> None:
+    items = 30
+    p = URIRef(EX + "job")
+    with _open(replicas[0], "jobs") as seed:
+        seed.write([(_s(n), p, Literal(n)) for n in range(items)])
+    taken: list[list] = [[], []]
+
+    def taker(k: int) -> None:
+        with _open(replicas[k], "jobs") as ts:
+            for n in range(items):
+                taken[k].extend(ts.take((_s(n), p, None)))
+
+    threads = [threading.Thread(target=taker, args=(k,)) for k in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=120)
+    both = taken[0] + taken[1]
+    assert sorted(int(o) for _, _, o in both) == list(range(items)), "each item taken once"
+    with _open(replicas[2], "jobs") as third:
+        assert len(third.query((None, p, None))) == 0
+
+
+def test_a_minority_replica_refuses_writes_and_reads(replicas: list[Server], etcd_cluster) -> None:
+    triple = (_s(7), URIRef(EX + "at"), Literal("dock"))
+    with _open(replicas[0], "cut") as ts:
+        ts.write([triple])
+        etcd_cluster.kill("m1")
+        etcd_cluster.kill("m2")
+        with pytest.raises(NoQuorum, match="no quorum: 1 of 3 members reachable"):
+            ts.write([(_s(8), URIRef(EX + "at"), Literal("hall"))])
+        with pytest.raises(NoQuorum, match="no quorum: 1 of 3 members reachable"):
+            ts.query((None, None, None))
+        assert triple in ts.query((None, None, None), stale=True)
+    cli = subprocess.run(
+        tspace_cmd("query", "-t", "?s ?p ?o", "--connect", replicas[1].endpoint, "--space", "cut"),
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert cli.returncode != 0
+    assert "no quorum: 1 of 3 members reachable" in cli.stderr
+    stale = subprocess.run(
+        tspace_cmd(
+            "query",
+            "-t",
+            "?s ?p ?o",
+            "--stale",
+            "--connect",
+            replicas[1].endpoint,
+            "--space",
+            "cut",
+        ),
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert stale.returncode == 0, stale.stderr
+    assert "dock" in stale.stdout
+
+
+def test_replicas_come_back_after_the_majority_does(replicas: list[Server], etcd_cluster) -> None:
+    with _open(replicas[0], "heal") as a:
+        a.write([(_s(1), URIRef(EX + "at"), Literal("dock"))])
+        etcd_cluster.kill("m1")
+        etcd_cluster.kill("m2")
+        with pytest.raises(SpaceError):
+            a.write([(_s(2), URIRef(EX + "at"), Literal("hall"))])
+        etcd_cluster.restart("m1")
+
+        def writes() -> bool:
+            try:
+                a.write([(_s(3), URIRef(EX + "at"), Literal("lab"))], timeout=2)
+                return True
+            except SpaceError:
+                return False
+
+        wait_for(writes, 30, "a write once two members are back")
+    with _open(replicas[1], "heal") as b:
+        found = {str(o) for _, _, o in b.query((None, URIRef(EX + "at"), None))}
+        assert found == {"dock", "lab"}
