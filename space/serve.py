@@ -77,7 +77,6 @@ def open_server(
                 guard=guard,
             )
         else:
-            # Meshed with other routers, a store first looks a while for a leading store there.
             server = StoreServer(
                 session,
                 data_dir or default_data_dir(),
@@ -85,7 +84,6 @@ def open_server(
                 log_keep=log_keep,
                 query_timeout=query_timeout,
                 max_spaces=max_spaces,
-                look_for_leader=2.0 if connect else 0.0,
                 guard=guard,
             )
         if store:
