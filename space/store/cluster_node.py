@@ -31,6 +31,9 @@ from space.store.etcd_client import EtcdClient
 from space.store.etcd_log import ClusterLog, Entry, Position
 
 T = TypeVar("T")
+# Transactions in flight at once: etcd batches concurrent proposals into one Raft round, so a
+# changeset arriving while others commit is sent at once instead of waiting a round.
+INFLIGHT = 8
 
 
 class ClusterNode:
@@ -71,7 +74,7 @@ class ClusterNode:
     async def _open(self) -> None:
         self.client = EtcdClient(self.endpoints)
         await self.client.open()
-        self.log = ClusterLog(self.client, root=self.root, node=self.node)
+        self.log = ClusterLog(self.client, root=self.root, node=self.node, inflight=INFLIGHT)
         await self.log.start()
         self.applier = Applier(
             self.client,
