@@ -44,14 +44,14 @@ def replicas(cluster: LocalCluster, workdir: Path, n: int = 3) -> Iterator[list[
         data = workdir / f"replica{i}"
         cmd = [sys.executable, "-m", "space.cli", "serve", "--listen", endpoint]
         cmd += ["--data", str(data), "--cluster", members]
-        log = open(workdir / f"replica{i}.log", "wb")  # noqa: SIM115 (closed with the process)
+        log = open(workdir / f"replica{i}.log", "wb")
         procs.append((subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT), log))
     try:
         for endpoint in endpoints:
             _wait_answers(endpoint)
         yield endpoints
     finally:
-        for proc, log in procs:
+        for proc, _ in procs:
             proc.send_signal(signal.SIGTERM)
         for proc, log in procs:
             try:
