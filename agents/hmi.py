@@ -43,6 +43,7 @@ from space import (
     from_nt,
     triple_text,
 )
+from space.cluster_status import ClusterWatch
 
 TASK_TYPES = ("AttendingPatient", "Guiding", "GoingToDock", "Idle")
 PREFIXES = PrefixMap({"ac": str(AC), "rdf": str(RDF), "rdfs": str(RDFS), "owl": str(OWL)})
@@ -65,6 +66,8 @@ class Hmi(Agent):
         self._new_events: list[dict] = []
         self.server: HmiServer | None = None
         self._http: threading.Thread | None = None
+        self.cluster: ClusterWatch | None = None  # replicas' quorum, in cluster mode
+        self._cluster_line = ""
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -99,6 +102,9 @@ class Hmi(Agent):
     def shutdown(self) -> None:
         """End the event streams, stop the web server, then leave the space."""
         try:
+            if self.cluster is not None:
+                self.cluster.close()
+                self.cluster = None
             self.board.close()
             if self.server is not None:
                 if self._http is not None:
@@ -111,6 +117,8 @@ class Hmi(Agent):
     def on_start(self) -> None:
         """Rebuild the history from the store's log, then show the state the space has now."""
         assert self.ts is not None
+        if self.cluster is None:
+            self.cluster = ClusterWatch(self.ts.session)
         seq = self.ts.seq(timeout=self.args.timeout)
         changes, _ = self.ts.history(max(1, seq - LOOKBACK + 1), seq, timeout=self.args.timeout)
         self._new_events = self.history.events(changes, self.view.graph)
@@ -126,6 +134,10 @@ class Hmi(Agent):
     def tick(self) -> None:
         """Run the commands the page sent since the last tick."""
         self.commands.run_pending(self._command)
+        line = self.cluster.line() if self.cluster is not None else ""
+        if line != self._cluster_line:
+            self._cluster_line = line
+            self._publish()
 
     def _publish(self) -> None:
         graph = self.view.graph
@@ -152,6 +164,7 @@ class Hmi(Agent):
                 "firings": [asdict(f) for f in read_firings(self.records)],
                 "tasks": [t for t in TASK_TYPES if self.view.task_of_type(t) is not None],
                 "levels": self._levels(),
+                "cluster": self.cluster.statuses() if self.cluster is not None else [],
             },
             events,
         )

@@ -10,6 +10,7 @@ and answers a read that asks for possibly stale answers.
 
 from __future__ import annotations
 
+import signal
 import subprocess
 import threading
 from collections.abc import Iterator
@@ -20,6 +21,7 @@ from rdflib import Literal, URIRef
 
 from conftest import Server, tspace_cmd, wait_for
 from space import TripleSpace
+from space.cluster_status import ClusterWatch
 from space.errors import NoQuorum, SpaceError
 
 EX = "http://example.org/"
@@ -87,9 +89,16 @@ def test_a_take_raced_on_two_replicas_wins_once(replicas: list[Server]) -> None:
 def test_a_minority_replica_refuses_writes_and_reads(replicas: list[Server], etcd_cluster) -> None:
     triple = (_s(7), URIRef(EX + "at"), Literal("dock"))
     with _open(replicas[0], "cut") as ts:
-        ts.write([triple])
-        etcd_cluster.kill("m1")
-        etcd_cluster.kill("m2")
+        watch = ClusterWatch(ts.session)
+        try:
+            wait_for(lambda: "3 of 3 reachable" in watch.line(), 10, "the replica's report")
+            ts.write([triple])
+            etcd_cluster.kill("m1")
+            etcd_cluster.kill("m2")
+            # what tspace up's view and the HMI show
+            wait_for(lambda: "no quorum: 1 of 3 members reachable" in watch.line(), 10, watch.line)
+        finally:
+            watch.close()
         with pytest.raises(NoQuorum, match="no quorum: 1 of 3 members reachable"):
             ts.write([(_s(8), URIRef(EX + "at"), Literal("hall"))])
         with pytest.raises(NoQuorum, match="no quorum: 1 of 3 members reachable"):
@@ -142,3 +151,18 @@ def test_replicas_come_back_after_the_majority_does(replicas: list[Server], etcd
     with _open(replicas[1], "heal") as b:
         found = {str(o) for _, _, o in b.query((None, URIRef(EX + "at"), None))}
         assert found == {"dock", "lab"}
+
+
+def test_a_replica_killed_resumes_from_its_revision(replicas: list[Server]) -> None:
+    at = URIRef(EX + "at")
+    with _open(replicas[0], "resume") as a:
+        a.write([(_s(1), at, Literal("dock"))])
+        replicas[1].stop(signal.SIGKILL)
+        for n in range(2, 12):
+            a.write([(_s(n), at, Literal("hall"))])
+    replicas[1].start()
+    with _open(replicas[1], "resume") as b:
+        assert len(b.query((None, at, None))) == 11
+        ack = b.write([(_s(12), at, Literal("lab"))])
+        assert ack.seq == 12  # numbered after the 11 it applied, none applied twice
+        assert b.seq() == 12
