@@ -50,6 +50,10 @@ log = logging.getLogger("tspace.store")
 MAX_ATTEMPTS = 20  # decisions of one request before its writer is told it kept conflicting
 
 
+class NotInCluster(SpaceError):
+    """A request asks for what a cluster replica does not do yet (lifespans)."""
+
+
 @dataclass
 class Flight:
     """A changeset of ours on its way through etcd, until applied here (or failed)."""
@@ -109,6 +113,11 @@ class ClusterWriter:
 
     def write(self, req: Request, attempt: int = 1) -> None:
         write = intake.write_request(req.payload or b"")
+        if write.lifespan is not None:
+            raise NotInCluster(
+                "not applied: triples with a lifespan are not supported in cluster mode yet "
+                "(docs/cluster.md); write them without one"
+            )
         state = self._writable(req.space)
         if self._again(req, state.name, write.id):
             return

@@ -200,18 +200,28 @@ class StoreDB:
         for q in self.store.quads_for_pattern(*pattern, graph(space, which)):
             yield q.subject, q.predicate, q.object
 
-    def commit(self, entries: list[Entry], *, revision: int | None = None) -> None:
+    def commit(
+        self,
+        entries: list[Entry],
+        extra: tuple[list[ox.Quad], list[ox.Quad]] = ([], []),
+        *,
+        revision: int | None = None,
+    ) -> None:
         """Write a batch of changesets with their log entries and seqs, atomically.
 
+        `extra`: quads to delete and to insert in the same update (leases).
         `revision`: a cluster replica's applied etcd revision, written in the
         same update (`space.store.cluster_db`), so a restart resumes there.
 
         Raises:
             CommitFailed: nothing of the batch was written.
         """
-        if not entries and revision is None:
+        if not entries and not any(extra) and revision is None:
             return
         ops = [op for e in entries for op in _operations(e)]
+        for verb, quads in zip(("DELETE", "INSERT"), extra, strict=True):
+            if quads:
+                ops.append(f"{verb} DATA {{ {_quads(quads)} }}")
         if revision is not None:
             from space.store.cluster_db import revision_ops
 
@@ -359,6 +369,14 @@ def log_quads(
     if dropped:
         quads.append(ox.Quad(entry, DROPPED, ox.Literal(base64.b64encode(dropped).decode()), g))
     return quads
+
+
+def _quads(quads: list[ox.Quad]) -> str:
+    """Return quads as GRAPH blocks, one per graph (a write's leases share theirs)."""
+    by_graph: dict[str, list[str]] = {}
+    for q in quads:
+        by_graph.setdefault(str(q.graph_name), []).append(f"{q.subject} {q.predicate} {q.object}")
+    return " ".join(f"GRAPH {g} {{ {' . '.join(ts)} }}" for g, ts in by_graph.items())
 
 
 def _block(g: ox.NamedNode, triples: Iterable[OxTriple]) -> str:

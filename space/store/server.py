@@ -28,6 +28,7 @@ from space.errors import MalformedPayload, QueryError, SpaceError
 from space.store import intake, queries
 from space.store.db import StoreDB
 from space.store.guard import WriteGuard, writer_of
+from space.store.lifespans import Leases
 from space.store.publish import Publisher
 from space.store.readers import Readers
 from space.store.state import SpaceState
@@ -75,6 +76,7 @@ class StoreServer:
         self._db: StoreDB | None = None
         self._worker: threading.Thread | None = None
         self._writer: Writer | None = None
+        self._leases = Leases()
 
     def start(self) -> None:
         """Open the database, then serve.
@@ -94,7 +96,9 @@ class StoreServer:
             publisher=self._publisher,
             max_spaces=self.max_spaces,
             guard=self.guard,
+            leases=self._leases,
         )
+        self._leases.load(self._db)
         for name in self._db.spaces():
             self._space(name)
         self._worker = threading.Thread(target=self._run, name="tspace-store", daemon=True)
@@ -147,7 +151,7 @@ class StoreServer:
                 self._writer.probe(self._readers.running)
                 next_beat = time.monotonic() + HEARTBEAT
             batch: list[Request] = []
-            wait = next_beat - time.monotonic()
+            wait = min(next_beat - time.monotonic(), self._expiry_wait())
             try:
                 item = self._queue.get(timeout=max(0.0, wait))
             except queue.Empty:
@@ -166,6 +170,7 @@ class StoreServer:
 
     def _handle(self, batch: list[Request]) -> None:
         pending: list[Pending] = []
+        self._writer.expire(pending)
         for req in batch:
             try:
                 if req.kind == "write":
@@ -240,7 +245,15 @@ class StoreServer:
         state = self._spaces.get(name)
         if state is None:
             state = self._spaces[name] = SpaceState(name, self._db_())
+            state.leases = self._leases
         return state
+
+    def _expiry_wait(self) -> float:
+        """Return the seconds until the next lease expires (a heartbeat if none)."""
+        due = self._leases.next_due()
+        if due is None:
+            return HEARTBEAT
+        return max(0.0, due - time.time())
 
     def _serve(self) -> list:
         root, s = self.root, self.session

@@ -19,6 +19,7 @@ from space.prefixes import PrefixMap
 from space.store import oxterms
 from space.store.db import FUNCTIONAL, Entry, StoreDB
 from space.store.intake import LISTS, WriteRequest
+from space.store.lifespans import Leases
 from space.store.oxterms import OxTerm, OxTriple
 
 _TYPE, _FUNCTIONAL_CLASS = (ox.NamedNode(x) for x in FUNCTIONAL)
@@ -50,6 +51,7 @@ class SpaceState:
         self._overlay: dict[tuple[str, OxTriple], bool] = {}
         self._pending_objects: dict[tuple[OxTerm, OxTerm], set[OxTerm]] = {}
         self._refresh_functional = False
+        self.leases: Leases | None = None  # the store's, once it serves this space
 
     def settle(self) -> None:
         """Forget the overlay once its batch is committed."""
@@ -68,6 +70,8 @@ class SpaceState:
         kept, replaced, dropped = self._functional_additions(req.added, stamp)
         removed, added = self._net("t", req.removed + replaced, kept)
         i_removed, i_added = self._net("i", req.inferred_removed, req.inferred_added)
+        if self.leases is not None:
+            self.leases.decide(self.name, req.id, req.lifespan, kept, removed)
         new_prefixes = self.prefixes.update(req.prefixes)
         if not (removed or added or i_removed or i_added or new_prefixes):
             return None, dropped
@@ -90,6 +94,8 @@ class SpaceState:
         if req.cause:
             wire["cause"] = req.cause
         wire["seq"] = entry.seq
+        if req.lifespan:
+            wire["lifespan"] = req.lifespan
         if new_prefixes:
             wire["prefixes"] = new_prefixes
         for name, listed in zip(LISTS, texts, strict=True):
