@@ -153,6 +153,14 @@ async def _leader(endpoints: list[str]) -> int:
         await client.close()
 
 
+def embedded_once(seconds: float, inflight: int) -> dict[str, float]:
+    """The same writers against one embedded store (`tspace serve`, no etcd), for reference."""
+    from _harness import serve_process
+
+    with serve_process() as (endpoint, _pid):
+        return throughput([endpoint], seconds, inflight)
+
+
 def run_once(workdir: Path, seconds: float, inflight: int) -> dict[str, float]:
     """One run: fresh etcd and replicas; throughput, then failover."""
     with LocalCluster(workdir / "etcd") as cluster:
