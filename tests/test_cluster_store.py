@@ -22,7 +22,7 @@ from rdflib import Literal, URIRef
 from conftest import Server, tspace_cmd, wait_for
 from space import TripleSpace
 from space.cluster_status import ClusterWatch
-from space.errors import NoQuorum, SpaceError
+from space.errors import ChangesetRejected, NoQuorum, SpaceError
 
 EX = "http://example.org/"
 
@@ -61,6 +61,10 @@ def test_a_write_on_one_replica_is_read_on_another(replicas: list[Server]) -> No
         ack = c.write([(_s(2), URIRef(EX + "at"), Literal("hall"))])
         assert ack.seq == 2  # every replica numbers the space's changesets alike
         assert len(a.query((None, URIRef(EX + "at"), None))) == 2
+        # not supported on a replica yet: refused, never silently kept forever
+        with pytest.raises(ChangesetRejected, match="lifespan"):
+            a.write([(_s(3), URIRef(EX + "at"), Literal("lab"))], lifespan=5)
+        assert c.seq() == 2
 
 
 def test_a_take_raced_on_two_replicas_wins_once(replicas: list[Server]) -> None:
