@@ -65,6 +65,12 @@ def test_a_write_on_one_replica_is_read_on_another(replicas: list[Server]) -> No
         with pytest.raises(ChangesetRejected, match="lifespan"):
             a.write([(_s(3), URIRef(EX + "at"), Literal("lab"))], lifespan=5)
         assert c.seq() == 2
+        # a changeset sent again to another replica (its writer's retry) is applied once
+        cs = a.changeset([(_s(4), URIRef(EX + "at"), Literal("ward"))])
+        first = a.send(cs)
+        again = c.send(cs)
+        assert (first.seq, again.seq) == (3, 3)
+        assert c.seq() == 3
 
 
 def test_a_take_raced_on_two_replicas_wins_once(replicas: list[Server]) -> None:
