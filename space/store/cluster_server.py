@@ -230,16 +230,7 @@ class ClusterStoreServer:
             if item is None:
                 going = False
             elif isinstance(item, tuple):
-                kind = item[0]
-                if kind == "redecide":
-                    req, attempt, followers = item[1]
-                    for r in (req, *followers):
-                        self._decide(r, attempt)
-                elif kind == "reads":
-                    for r in item[1]:
-                        self._read(r)
-                else:
-                    writer.event(item)
+                self._event(item)
             elif item.kind == "write" or (item.kind == "query" and _op(item.payload) == "take"):
                 self._decide(item, 1)
             elif item.kind == "spaces":
@@ -249,10 +240,33 @@ class ClusterStoreServer:
                     self._read(item)
                 else:
                     reads.append(item)
-        writer.apply_pending()
+        try:
+            writer.apply_pending()
+        except Exception as exc:  # a bug: stop taking writes rather than diverge silently
+            log.exception("replica failed to apply the log: refusing writes; restart it")
+            writer.failed = f"internal error while applying: {type(exc).__name__}: {exc}"
         if reads:
             writer.ask_barrier(("reads", reads))
         return going
+
+    def _event(self, item: tuple) -> None:
+        """Handle what etcd's thread or a barrier put on the queue."""
+        writer = self._writer
+        assert writer is not None
+        kind = item[0]
+        if kind == "redecide":
+            req, attempt, followers = item[1]
+            for r in (req, *followers):
+                self._decide(r, attempt)
+        elif kind == "reads":
+            for r in item[1]:
+                self._read(r)
+        else:
+            try:
+                writer.event(item)
+            except Exception as exc:  # a bug: stop taking writes rather than diverge silently
+                log.exception("replica failed on a %s event: refusing writes; restart it", kind)
+                writer.failed = f"internal error: {type(exc).__name__}: {exc}"
 
     def _decide(self, req: Request, attempt: int) -> None:
         writer = self._writer

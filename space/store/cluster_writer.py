@@ -384,7 +384,11 @@ class ClusterWriter:
         ours: list[tuple[Flight, Net]] = []
         for revision, batches in applied:
             for batch in batches:
-                state = self._space(keys.check_space(batch.space))
+                try:
+                    state = self._space(keys.check_space(batch.space))
+                except (SpaceError, ValueError) as exc:
+                    log.error("revision %d: skipped a space with a bad name: %s", revision, exc)
+                    continue
                 for i, payload in enumerate(batch.payloads):
                     try:
                         net = state.install_at(payload, batch.first_seq + i)
