@@ -160,7 +160,9 @@ def test_replicas_come_back_after_the_majority_does(replicas: list[Server], etcd
         wait_for(writes, 30, "a write once two members are back")
     with _open(replicas[1], "heal") as b:
         found = {str(o) for _, _, o in b.query((None, URIRef(EX + "at"), None))}
-        assert found == {"dock", "lab"}
+        # every acknowledged write; the refused one only if etcd had it from before the cut
+        # (a refusal after the write was sent is not a proof it was not committed)
+        assert {"dock", "lab"} <= found <= {"dock", "hall", "lab"}
 
 
 def test_a_replica_killed_resumes_from_its_revision(replicas: list[Server]) -> None:
