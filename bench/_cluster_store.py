@@ -115,6 +115,7 @@ def throughput(endpoints: list[str], seconds: float, inflight: int) -> dict[str,
             "p50": percentile(latencies, 50),
             "p99": percentile(latencies, 99),
             "failed": failures,
+            "latencies": latencies,  # type: ignore[dict-item]
         }
     finally:
         for h in handles:

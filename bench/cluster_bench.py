@@ -162,7 +162,7 @@ async def failover_run(cluster: LocalCluster, inflight: int) -> float:
         await client.close()
 
 
-def plot(latencies: list[float], failovers: list[float]) -> Path:
+def plot(latencies: list[float], failovers: list[float], name: str = "cluster") -> Path:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -176,14 +176,15 @@ def plot(latencies: list[float], failovers: list[float]) -> Path:
     left.annotate("target p99 20 ms", (20, 0.1), rotation=90)
     left.set_xlabel("append -> ack (ms)")
     left.set_ylabel("share of changesets")
-    left.set_title("Ack latency, 3 etcd members, 64 in flight")
+    where = "through 3 replicas" if name != "cluster" else "3 etcd members"
+    left.set_title(f"Ack latency, {where}, 64 in flight")
     left.grid(True, alpha=0.3)
     right.bar(range(1, len(failovers) + 1), failovers)
     right.axhline(3.0, linestyle="--", color="grey")
     right.set_xlabel("run")
     right.set_ylabel("leader kill -9 -> next ack (s)")
     right.set_title("Failover")
-    path = OUT / "cluster.png"
+    path = OUT / f"{name}.png"
     figure.savefig(path, dpi=120, bbox_inches="tight")
     return path
 
@@ -230,11 +231,13 @@ def main(runs: int, seconds: float, inflight: int) -> None:
 def main_store(runs: int, seconds: float, inflight: int) -> None:
     from _cluster_store import embedded_once, run_once
 
-    rows = []
+    rows, latencies, failovers = [], [], []
     for run in range(runs):
         one = embedded_once(seconds, inflight)
         with tempfile.TemporaryDirectory(prefix="tspace-cluster-store-") as tmp:
             r = run_once(Path(tmp), seconds, inflight)
+        latencies += r.pop("latencies")  # type: ignore[arg-type]
+        failovers.append(r["failover"])
         cluster = [r["rate"], r["p50"], r["p99"], r["failed"], r["failover"]]
         rows.append([run + 1, one["rate"], one["p99"], *cluster, os.getloadavg()[0]])
         print(rows[-1], flush=True)
@@ -256,6 +259,7 @@ def main_store(runs: int, seconds: float, inflight: int) -> None:
         ],
         rows,
     )
+    print(f"plot: {plot(latencies, failovers, 'cluster-store')}")
 
 
 if __name__ == "__main__":
