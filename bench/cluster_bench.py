@@ -174,7 +174,7 @@ def plot(latencies: list[float], failovers: list[float], name: str = "cluster") 
     left.step(values, [(i + 1) / len(values) for i in range(len(values))], where="post")
     left.axvline(20, linestyle="--", color="grey")
     left.annotate("target p99 20 ms", (20, 0.1), rotation=90)
-    left.set_xlabel("append -> ack (ms)")
+    left.set_xlabel("append -> ack (ms)" if name == "cluster" else "send -> ack (ms)")
     left.set_ylabel("share of changesets")
     where = "through 3 replicas" if name != "cluster" else "3 etcd members"
     left.set_title(f"Ack latency, {where}, 64 in flight")

@@ -71,6 +71,12 @@ def test_a_write_on_one_replica_is_read_on_another(replicas: list[Server]) -> No
         again = c.send(cs)
         assert (first.seq, again.seq) == (3, 3)
         assert c.seq() == 3
+    # a prefix binding sent with a write is kept by the replica that decided it and the others
+    with TripleSpace.open(replicas[0].endpoint, space="fleet", prefixes={"ex": EX}) as named:
+        named.write([(_s(5), URIRef(EX + "at"), Literal("lab"))])
+    for r in (replicas[0], replicas[2]):
+        with _open(r, "fleet") as fresh:
+            assert fresh.load_prefixes().as_dict().get("ex") == EX
 
 
 def test_a_take_raced_on_two_replicas_wins_once(replicas: list[Server]) -> None:

@@ -62,12 +62,16 @@ class ClusterSpace(SpaceState):
         if not isinstance(wire, dict):
             raise MalformedPayload("a logged changeset is a map")
         wire["seq"] = seq
+        bindings = wire.get("prefixes") or {}
+        # New to the database, also when our own decision already taught them to `prefixes`.
+        new = {k: v for k, v in bindings.items() if self._applied_prefixes.get(k) != v}
         self._stamps = self._applied_stamps  # type: ignore[assignment]
         try:
             net = self.install(pack(wire))
         finally:
             self._stamps = ChainMap(self._flying_stamps, self._applied_stamps)  # type: ignore[assignment]
-        self._applied_prefixes.update(net.entry.prefixes)
+        net.entry.prefixes = new
+        self._applied_prefixes.update(new)
         return net
 
     def settle(self) -> None:
