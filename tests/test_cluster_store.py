@@ -10,6 +10,7 @@ and answers a read that asks for possibly stale answers.
 
 from __future__ import annotations
 
+import asyncio
 import signal
 import subprocess
 import threading
@@ -18,6 +19,7 @@ from pathlib import Path
 
 import pytest
 from rdflib import Literal, URIRef
+from rdflib.namespace import OWL, RDF
 
 from conftest import Server, tspace_cmd, wait_for
 from space import TripleSpace
@@ -184,3 +186,45 @@ def test_a_replica_killed_resumes_from_its_revision(replicas: list[Server]) -> N
         ack = b.write([(_s(12), at, Literal("lab"))])
         assert ack.seq == 12  # numbered after the 11 it applied, none applied twice
         assert b.seq() == 12
+
+
+def test_a_replica_behind_a_compaction_relists_the_space_whole(
+    replicas: list[Server], etcd_cluster
+) -> None:
+    at, level = URIRef(EX + "at"), URIRef(EX + "level")
+    with _open(replicas[0], "relist") as a:
+        a.write([(level, RDF.type, OWL.FunctionalProperty)])
+        a.write([(_s(1), at, Literal("dock")), (_s(1), level, Literal(10))])
+        replicas[1].stop(signal.SIGKILL)
+        a.write([(_s(2), at, Literal("hall")), (_s(1), level, Literal(20))])
+        a.take((_s(1), at, None))
+        seq = a.seq()
+    # as if the replica had been away longer than etcd keeps the log: compact it all away
+    asyncio.run(_compact_all(etcd_cluster.endpoints))
+    replicas[1].start()
+    with _open(replicas[1], "relist") as b:
+        found = set(b.query((None, None, None), graph="asserted"))
+        assert (_s(2), at, Literal("hall")) in found
+        assert (_s(1), at, Literal("dock")) not in found  # taken
+        assert (_s(1), level, Literal(20)) in found and (_s(1), level, Literal(10)) not in found
+        assert b.seq() == seq
+        ack = b.write([(_s(1), level, Literal(30))])  # the functional value is still replaced
+        assert ack.seq == seq + 1
+        assert {o for _, _, o in b.query((_s(1), level, None))} == {Literal(30)}
+    with _open(replicas[0], "relist") as a:
+        assert {o for _, _, o in a.query((_s(1), level, None))} == {Literal(30)}
+    assert "re-listed every space" in replicas[1].logs()
+
+
+async def _compact_all(endpoints: list[str]) -> None:
+    from aetcd import rpc
+
+    from space.store.etcd_client import EtcdClient
+
+    client = EtcdClient(endpoints)
+    await client.open()
+    try:
+        reply = await client.range(rpc.RangeRequest(key=b"tspace/", count_only=True))
+        await client.compact(reply.header.revision)
+    finally:
+        await client.close()

@@ -25,21 +25,18 @@ import logging
 import queue
 import uuid
 from collections.abc import Callable
-from dataclasses import dataclass, field
 
 import zenoh
 
 from space import keys
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload, SpaceError, WriteConflict
-from space.store import intake, oxterms
-from space.store.cluster_entries import Decision, entry_for
+from space.store import intake
+from space.store.cluster_flights import Flight, chain, committed, guarded_entry
 from space.store.cluster_node import ClusterNode
 from space.store.cluster_state import ClusterSpace
 from space.store.db import CommitFailed, StoreDB
 from space.store.etcd_applier import Batch
-from space.store.etcd_log import Entry as LogEntry
-from space.store.etcd_log import Position
 from space.store.guard import Refused, WriteGuard
 from space.store.publish import Publisher
 from space.store.state import Net
@@ -52,25 +49,6 @@ MAX_ATTEMPTS = 20  # decisions of one request before its writer is told it kept 
 
 class NotInCluster(SpaceError):
     """A request asks for what a cluster replica does not do yet (lifespans)."""
-
-
-@dataclass
-class Flight:
-    """A changeset of ours on its way through etcd, until applied here (or failed)."""
-
-    req: Request
-    state: ClusterSpace
-    net: Net
-    reply: Callable[[Net], dict]
-    entry: LogEntry
-    attempt: int
-    request: str
-    writes: set[bytes]
-    deps: set[int] = field(default_factory=set)  # ids of flights this one waits for
-    waiting: list[Flight] = field(default_factory=list)
-    position: Position | None = None
-    over: bool = False  # applied or failed
-    followers: list[Request] = field(default_factory=list)  # the same request id, sent again
 
 
 class ClusterWriter:
@@ -221,27 +199,8 @@ class ClusterWriter:
         *,
         taken: bool,
     ) -> None:
-        functional = frozenset(oxterms.text(p) for p in state.functional_properties())
-        add, rem, iadd, irem = ([tuple(t) for t in ts] for ts in net.texts)
-        replaced = list(dict.fromkeys((t[0], t[1]) for t in (*add, *rem) if t[1] in functional))
-        decision = Decision(
-            space=state.name,
-            payload=net.entry.payload,
-            revision=self.revision,
-            stamp=stamp,
-            functional=functional,
-            added=add,  # type: ignore[arg-type]
-            removed=rem,  # type: ignore[arg-type]
-            inferred_added=iadd,  # type: ignore[arg-type]
-            inferred_removed=irem,  # type: ignore[arg-type]
-            replaced=replaced,  # type: ignore[arg-type]
-            taken=rem if taken else [],  # type: ignore[arg-type]
-            prefixes=net.entry.prefixes,
-            request=ident,
-        )
-        entry = entry_for(self.root, decision)
-        writes = {*entry.puts, *entry.deletes, *entry.leased}
-        flight = Flight(req, state, net, reply, entry, attempt, ident, writes)
+        entry = guarded_entry(self.root, state, net, self.revision, stamp, ident, taken=taken)
+        flight = Flight(req, state, net, reply, entry, attempt, ident)
         self._by_payload[entry.payload] = flight
         self._by_request[(state.name, ident)] = flight
         self._staged.append(flight)
@@ -252,18 +211,7 @@ class ClusterWriter:
         """Send what was decided, chained on our flights it read (before anything is applied)."""
         staged, self._staged = self._staged, []
         for flight in staged:
-            for key in {*flight.entry.guards, *flight.entry.present}:
-                dep = self._writers.get(key)
-                if dep is None or dep.over or dep is flight:
-                    continue
-                if dep.position is not None:
-                    flight.entry.guards[key] = max(flight.entry.guards[key], dep.position.revision)
-                elif id(dep) not in flight.deps:
-                    flight.deps.add(id(dep))
-                    dep.waiting.append(flight)
-            for key in flight.writes:
-                self._writers[key] = flight
-            if not flight.deps:
+            if chain(flight, self._writers):
                 self._send(flight)
 
     def _send(self, flight: Flight) -> None:
@@ -289,14 +237,8 @@ class ClusterWriter:
             return
         error = future.exception()
         if error is None:
-            flight.position = future.result()
-            for w in flight.waiting:
-                for key in flight.writes & {*w.entry.guards, *w.entry.present}:
-                    w.entry.guards[key] = max(w.entry.guards.get(key, 0), flight.position.revision)
-                w.deps.discard(id(flight))
-                if not w.deps and not w.over:
-                    self._send(w)
-            flight.waiting = []
+            for ready in committed(flight, future.result()):
+                self._send(ready)
             return
         if isinstance(error, WriteConflict):
             self._conflict(flight)
