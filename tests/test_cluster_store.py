@@ -104,6 +104,31 @@ def test_a_take_raced_on_two_replicas_wins_once(replicas: list[Server]) -> None:
         assert len(third.query((None, p, None))) == 0
 
 
+def test_a_functional_value_written_on_two_replicas_at_once_stays_one(
+    replicas: list[Server],
+) -> None:
+    level, robot = URIRef(EX + "level"), _s(1)
+    with _open(replicas[0], "dock") as seed:
+        seed.write([(level, RDF.type, OWL.FunctionalProperty)])
+
+    def writer(k: int) -> None:
+        with _open(replicas[2 * k], "dock") as ts:
+            for n in range(25):
+                ts.write([(robot, level, Literal(100 * k + n))])
+
+    threads = [threading.Thread(target=writer, args=(k,)) for k in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=120)
+    values = []
+    for r in replicas:
+        with _open(r, "dock") as ts:
+            values.append({o for _, _, o in ts.query((robot, level, None))})
+    assert len(values[0]) == 1, values  # never both values: the replacement was decided once
+    assert values[0] == values[1] == values[2]
+
+
 def test_a_minority_replica_refuses_writes_and_reads(replicas: list[Server], etcd_cluster) -> None:
     triple = (_s(7), URIRef(EX + "at"), Literal("dock"))
     with _open(replicas[0], "cut") as ts:
