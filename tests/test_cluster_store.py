@@ -11,17 +11,20 @@ and answers a read that asks for possibly stale answers.
 from __future__ import annotations
 
 import asyncio
+import json
 import signal
 import subprocess
 import threading
+import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from agentprocs import AgentProcess, knowledge
 from rdflib import Literal, URIRef
 from rdflib.namespace import OWL, RDF
 
-from conftest import Server, tspace_cmd, wait_for
+from conftest import Server, free_port, tspace_cmd, wait_for
 from space import TripleSpace
 from space.cluster_status import ClusterWatch
 from space.errors import ChangesetRejected, NoQuorum, SpaceError
@@ -253,3 +256,26 @@ async def _compact_all(endpoints: list[str]) -> None:
         await client.compact(reply.header.revision)
     finally:
         await client.close()
+
+
+def _quorum_on_page(port: int) -> list[tuple[int, bool]]:
+    try:
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/state", timeout=2) as reply:
+            return [(c["reachable"], c["quorum"]) for c in json.load(reply).get("cluster", [])]
+    except OSError:
+        return []
+
+
+def test_the_hmi_shows_its_replicas_quorum(replicas: list[Server], etcd_cluster, tmp_path) -> None:
+    with _open(replicas[0], "ward") as ts:
+        ts.write(knowledge())
+    port = free_port()
+    hmi = AgentProcess("hmi", replicas[0].endpoint, "ward", tmp_path, "--http-port", str(port))
+    hmi.start()
+    try:
+        wait_for(lambda: _quorum_on_page(port) == [(3, True)], 30, "the quorum shown", hmi.logs)
+        etcd_cluster.kill("m1")
+        etcd_cluster.kill("m2")
+        wait_for(lambda: _quorum_on_page(port) == [(1, False)], 30, "no quorum shown", hmi.logs)
+    finally:
+        hmi.stop()
