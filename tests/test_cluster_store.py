@@ -5,7 +5,10 @@ one replica learns of another's writes came through etcd. A writer on one
 replica reads its write on another; two takers on two replicas race for the
 same items and each item is taken once; a replica whose side has lost the
 majority refuses writes and reads with "no quorum: 1 of 3 members reachable",
-and answers a read that asks for possibly stale answers.
+and answers a read that asks for possibly stale answers. Also: one functional
+value when two replicas write it at once, exactly once across replicas, a
+replica resuming from its revision after kill -9 or re-listing after a
+compaction, and the quorum shown by the HMI.
 """
 
 from __future__ import annotations
