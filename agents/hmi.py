@@ -36,6 +36,7 @@ from agents.vocabulary import AC, local_name
 from space import (
     Change,
     ChangeRecord,
+    ClusterWatch,
     MalformedPayload,
     PrefixMap,
     Template,
@@ -43,7 +44,6 @@ from space import (
     from_nt,
     triple_text,
 )
-from space.cluster_status import ClusterWatch
 
 TASK_TYPES = ("AttendingPatient", "Guiding", "GoingToDock", "Idle")
 PREFIXES = PrefixMap({"ac": str(AC), "rdf": str(RDF), "rdfs": str(RDFS), "owl": str(OWL)})

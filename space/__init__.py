@@ -13,6 +13,7 @@ from space.ack import Ack, Dropped
 from space.changeset import Changeset
 from space.cli.options import add_connect, identity_of
 from space.client import Transaction, TripleSpace
+from space.cluster_status import ClusterWatch
 from space.errors import (
     ChangesetRejected,
     InputError,
@@ -55,6 +56,7 @@ __all__ = [
     "ChangeRecord",
     "Changeset",
     "ChangesetRejected",
+    "ClusterWatch",
     "Dropped",
     "Explanation",
     "Identity",

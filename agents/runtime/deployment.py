@@ -23,6 +23,7 @@ from agents.runtime.robotview import BadValues, read_firings, read_robots
 from agents.runtime.scenario import Scenario, ScenarioRun
 from agents.runtime.supervisor import ProcessSpec, Supervisor
 from space import (
+    ClusterWatch,
     SpaceError,
     SpaceMirror,
     TripleSpace,
@@ -30,7 +31,6 @@ from space import (
     load_identity,
     read_turtle,
 )
-from space.cluster_status import ClusterWatch
 
 STORE_STARTUP = 30.0
 TICK = 0.1
