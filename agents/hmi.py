@@ -27,6 +27,7 @@ from rdflib import OWL, RDF, RDFS, Literal, URIRef
 from rdflib.term import Node
 
 from agents.base import Agent, run_agent
+from agents.hmi_freshness import Freshness
 from agents.hmi_history import LOOKBACK, History
 from agents.hmi_web.guard import Guard
 from agents.hmi_web.server import CommandError, Commands, HmiServer, StateBoard
@@ -54,7 +55,6 @@ class Hmi(Agent):
     """Serve the HMI web page for every robot of the space."""
 
     kind = "hmi"
-    reads_records = True  # its "last rule firings" come from the changes
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)
@@ -63,6 +63,7 @@ class Hmi(Agent):
         self.records: deque[ChangeRecord] = deque(maxlen=200)
         self.bad_values = BadValues(self.log.warning)
         self.history = History()
+        self.freshness = Freshness()
         self._new_events: list[dict] = []
         self.server: HmiServer | None = None
         self._http: threading.Thread | None = None
@@ -128,15 +129,19 @@ class Hmi(Agent):
     def on_change(self, change: Change) -> None:
         """Remember the change (its events, and to explain later firings); show the new state."""
         self.records.append(ChangeRecord.of(change))
+        self.freshness.note(change)
         self._new_events += self.history.events([change], self.view.graph)
         self._publish()
 
     def tick(self) -> None:
-        """Run the commands the page sent since the last tick."""
+        """Run the commands the page sent since the last tick; tell the page of renewals."""
         self.commands.run_pending(self._command)
         line = self.cluster.line() if self.cluster is not None else ""
-        if line != self._cluster_line:
+        if line != self._cluster_line:  # first: a minority side's reads below fail
             self._cluster_line = line
+            self._publish()
+        assert self.ts is not None
+        if self.freshness.poll(self.ts, self.args.timeout):
             self._publish()
 
     def _publish(self) -> None:
@@ -148,11 +153,14 @@ class Hmi(Agent):
             state = asdict(robot)
             for device in state["devices"]:
                 device["reported"] = self.view.text(AC[device["name"]], AC.actual_mode)
+                device["reported_fresh"] = self.freshness.of(AC[device["name"]], AC.actual_mode)
+            battery = self.view.device(iri, AC.Battery)
             state.update(
                 site=local_name(site) if isinstance(site, URIRef) else None,
                 presence=self.view.text(iri, AC.presence),
                 people=self._named(site, AC.Person, AC.Patient),
                 places=self._named(site, AC.Room, AC.Corridor, AC.Dock),
+                battery_fresh=self.freshness.of(battery, AC.battery_level),
             )
             robots.append(state)
         events, self._new_events = self._new_events, []

@@ -12,10 +12,10 @@ from typing import TYPE_CHECKING
 
 import zenoh
 
+from space._heap import freeze_startup
+from space._session import open_router
 from space.errors import InputError
-from space.heap import freeze_startup
 from space.identity import Identity
-from space.session import open_router
 from space.store.guard import WriteGuard
 from space.store.server import StoreServer
 

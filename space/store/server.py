@@ -25,7 +25,7 @@ import zenoh
 from space import keys
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload, QueryError, SpaceError
-from space.store import intake, queries
+from space.store import intake, lifespans, queries
 from space.store.db import StoreDB
 from space.store.guard import WriteGuard, writer_of
 from space.store.lifespans import Leases
@@ -38,6 +38,8 @@ log = logging.getLogger("tspace.store")
 
 _BATCH = 256
 HEARTBEAT = 0.5  # seconds between publications of each space's sequence number
+OVERDUE = 0.02  # seconds late from which an expiry turn runs even while requests wait
+BUSY = 0.05  # seconds after a request during which expiry turns are one write each
 _READS = ("query", "log", "keys")
 
 
@@ -77,6 +79,7 @@ class StoreServer:
         self._worker: threading.Thread | None = None
         self._writer: Writer | None = None
         self._leases = Leases()
+        self._busy_until = 0.0  # monotonic time until which requests are coming in
 
     def start(self) -> None:
         """Open the database, then serve.
@@ -167,10 +170,13 @@ class StoreServer:
             self._handle(batch)
             if item is None:
                 return
+            if batch[0].kind != "tick":
+                self._busy_until = time.monotonic() + BUSY
+            if self._queue.empty() or self._expiry_overdue():
+                self._sweep()
 
     def _handle(self, batch: list[Request]) -> None:
         pending: list[Pending] = []
-        self._writer.expire(pending)
         for req in batch:
             try:
                 if req.kind == "write":
@@ -247,6 +253,27 @@ class StoreServer:
             state = self._spaces[name] = SpaceState(name, self._db_())
             state.leases = self._leases
         return state
+
+    def _sweep(self) -> None:
+        """Commit one turn of expiries on its own, between batches (writes never wait for more).
+
+        It runs when no request waits, or when expiries are late by `OVERDUE` (so a
+        steady stream of writes cannot hold them back for ever). While requests come
+        in (one within `BUSY` s), a turn is one expired write, so a write arriving
+        meanwhile waits for that one's commit at most; else about `lifespans.BUDGET`
+        triples' worth, to sweep a mass expiry fast.
+        """
+        pending: list[Pending] = []
+        busy = time.monotonic() < self._busy_until
+        try:
+            self._writer.expire(pending, lifespans.BUSY if busy else lifespans.BUDGET)
+            self._writer.commit(pending)  # a failed commit: the writer refuses writes, says why
+        except Exception:  # a bug must not stop the store
+            log.exception("store failed sweeping expired writes")
+
+    def _expiry_overdue(self) -> bool:
+        due = self._leases.next_due()
+        return due is not None and due < time.time() - OVERDUE
 
     def _expiry_wait(self) -> float:
         """Return the seconds until the next lease expires (a heartbeat if none)."""

@@ -1,0 +1,323 @@
+"""Gap-free change delivery: subscribe first, learn the store's sequence, fill gaps from its log.
+
+Zenoh callbacks only hand payloads to a queue; a dispatcher thread per
+`TripleSpace` orders them by sequence number, drops duplicates, fetches what
+was missed, and calls the user's callbacks. A slow callback therefore delays
+later changes but never blocks Zenoh.
+"""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+from collections.abc import Callable
+from contextlib import ExitStack
+from dataclasses import dataclass, field
+
+import zenoh
+from rdflib.term import Node
+
+from space.changeset import Changeset, published_seq, unpack
+from space.errors import MalformedPayload, SpaceError
+from space.template import Template
+
+log = logging.getLogger("tspace.subscription")
+
+
+@dataclass
+class Change(Changeset):
+    """The part of one changeset that matches a subscription's template."""
+
+    bindings: list[dict[str, Node]] = field(default_factory=list)
+
+
+Callback = Callable[[Change], None]
+
+
+class Subscription:
+    """One `subscribe()` to whole changesets: a template, a callback, the last seq delivered.
+
+    `skip_agent` (a writer's name) leaves out that writer's changesets before
+    their terms are parsed. Close it with `close()` (or `TripleSpace.unsubscribe`).
+    """
+
+    merges = False  # whether changes with one seq may arrive apart (parts), to merge
+
+    def __init__(
+        self,
+        dispatcher: Dispatcher,
+        template: Template,
+        callback: Callback,
+        *,
+        skip_agent: str | None = None,
+    ) -> None:
+        self.template = template
+        self.callback = callback
+        self.skip_agent = skip_agent
+        self.last_seq = 0
+        self.ready = False
+        self.early: list[object] = []
+        self.initial: Change | None = None
+        self._dispatcher = dispatcher
+        self._subscribers: list[zenoh.Subscriber] = []
+
+    def attach(self, subscriber: zenoh.Subscriber) -> None:
+        """Take ownership of a Zenoh subscriber that feeds this subscription."""
+        self._subscribers.append(subscriber)
+
+    def close(self) -> None:
+        """Stop receiving changes; the callback is not called again."""
+        subscribers, self._subscribers = self._subscribers, []
+        with ExitStack() as steps:  # each runs even when another raised
+            steps.callback(self._dispatcher.forget, self)
+            for subscriber in subscribers:
+                steps.callback(subscriber.undeclare)
+
+    def item(self, sample: zenoh.Sample) -> object:
+        """Return what the Zenoh callback queues for the dispatcher thread."""
+        return sample.payload.to_bytes()
+
+    def decode(self, payload: bytes) -> tuple[int, Changeset | None]:
+        """Return a change's sequence number and changeset; None for a changeset skipped unparsed.
+
+        Raises:
+            MalformedPayload: not msgpack, not a published changeset (no id, no seq),
+                or (if parsed) a term is invalid.
+        """
+        wire = unpack(payload)
+        seq = published_seq(wire)
+        assert isinstance(wire, dict)
+        if self.skip_agent is not None and wire.get("agent") == self.skip_agent:
+            return seq, None
+        return seq, Changeset.from_wire(wire)  # its seq, checked above, is read as it is
+
+    def receive(self, item: object, fetch: Fetch) -> list[Change]:
+        """Return the changes to deliver for a received changeset, filling a gap before it.
+
+        Raises:
+            MalformedPayload: the payload is not a published changeset.
+        """
+        assert isinstance(item, bytes)
+        seq, cs = self.decode(item)
+        if seq <= self.last_seq:
+            return []
+        if seq == self.last_seq + 1:
+            return self._advance(seq, cs)
+        # A gap. Anyone can publish on the changes key: a seq the store's log does not
+        # hold must not move `last_seq`, or every later real change would look old.
+        # So the log, not this message, says what happened up to it.
+        changes = self.behind(seq, fetch)
+        if self.last_seq < seq:
+            log.warning(
+                "change %d is not in the store's log: skipped (delivered up to %d); "
+                "if real, the store's heartbeat brings it back",
+                seq,
+                self.last_seq,
+            )
+        return changes
+
+    def behind(self, seq: int, fetch: Fetch) -> list[Change]:
+        """Return what the store's log holds after `last_seq`, up to `seq` at most."""
+        if seq <= self.last_seq:
+            return []
+        try:
+            missed, _now = fetch(self.last_seq + 1, seq)
+        except SpaceError as exc:
+            log.warning("could not fetch changes %d..%d: %s", self.last_seq + 1, seq, exc)
+            return []
+        changes = []
+        for payload in missed:
+            try:
+                got, cs = self.decode(payload)
+            except MalformedPayload as exc:
+                log.warning("malformed logged change skipped: %s", exc)
+                continue
+            if got > self.last_seq:
+                changes += self._advance(got, cs)
+        return changes
+
+    def _advance(self, seq: int, cs: Changeset | None) -> list[Change]:
+        self.last_seq = seq
+        change = None if cs is None else self.filter(cs)
+        return [] if change is None else [change]
+
+    def filter(self, cs: Changeset) -> Change | None:
+        """Return the matching part of a changeset, or None if nothing matches."""
+        t = self.template
+        if t.s is None and t.p is None and t.o is None:  # everything matches, nothing binds
+            lists = [cs.added, cs.removed, cs.inferred_added, cs.inferred_removed]
+            bindings: list = []
+        else:
+            lists = [
+                [x for x in triples if t.match(x) is not None]
+                for triples in (cs.added, cs.removed, cs.inferred_added, cs.inferred_removed)
+            ]
+            bindings = [b for x in (y for ys in lists for y in ys) if (b := t.match(x))]
+        if not any(lists):
+            return None
+        return Change(
+            id=cs.id,
+            agent=cs.agent,
+            timestamp=cs.timestamp,
+            cause=cs.cause,
+            seq=cs.seq,
+            prefixes=cs.prefixes,
+            added=lists[0],
+            removed=lists[1],
+            inferred_added=lists[2],
+            inferred_removed=lists[3],
+            bindings=bindings,
+        )
+
+
+# (first, last) -> (the logged payloads first..last still kept, the store's seq now)
+Fetch = Callable[[int, int], tuple[list[bytes], int]]
+LATEST = 2**62  # "up to the store's current sequence number" in a log request
+_BATCH = 1000  # queued items handled before their changes are delivered
+
+
+@dataclass(frozen=True)
+class _Behind:
+    """A queued marker: the store is at `seq`; fetch what is missing up to it."""
+
+    seq: int
+
+
+class Dispatcher:
+    """The thread that delivers changes to every subscription of one `TripleSpace`."""
+
+    def __init__(self, fetch_log: Fetch) -> None:
+        self._fetch_log = fetch_log
+        self._queue: queue.SimpleQueue[tuple[Subscription, object] | None] = queue.SimpleQueue()
+        self._subs: set[Subscription] = set()
+        self._thread = threading.Thread(target=self._run, name="tspace-dispatch", daemon=True)
+        self._started = False
+        self._lock = threading.Lock()
+
+    def feed(self, sub: Subscription) -> Callable[[zenoh.Sample], None]:
+        """Return the Zenoh callback that feeds a subscription (it only enqueues)."""
+
+        def callback(sample: zenoh.Sample) -> None:
+            self._queue.put((sub, sub.item(sample)))
+
+        return callback
+
+    def add(self, sub: Subscription) -> None:
+        """Register a subscription, starting the thread on first use."""
+        with self._lock:
+            self._subs.add(sub)
+            if not self._started:
+                self._started = True
+                self._thread.start()
+
+    def mark_ready(self, sub: Subscription, seq: int, initial: Change | None = None) -> None:
+        """Tell the thread that `sub` has seen everything up to `seq`.
+
+        `initial` (the snapshot, if asked for) is delivered before any later change.
+        """
+        sub.last_seq = seq
+        sub.initial = initial
+        self._queue.put((sub, None))
+
+    def catch_up(self, seq: int = LATEST) -> None:
+        """Make every subscription fetch what it missed up to `seq` from the store's log.
+
+        Called on a reconnection, when the leading store's token comes back, and
+        on the store's heartbeat (its current sequence number), so a change missed
+        during a cut arrives even when no later change follows it. Safe in a Zenoh
+        callback: it only enqueues.
+        """
+        with self._lock:
+            subs = list(self._subs)
+        for sub in subs:
+            self._queue.put((sub, _Behind(seq)))
+
+    def forget(self, sub: Subscription) -> None:
+        """Stop delivering to a subscription."""
+        with self._lock:
+            self._subs.discard(sub)
+
+    def close(self) -> None:
+        """Stop the thread after what is queued."""
+        with self._lock:
+            started = self._started
+        if started:
+            self._queue.put(None)
+            if threading.current_thread() is not self._thread:
+                self._thread.join(timeout=5)
+
+    def _run(self) -> None:
+        out: list[tuple[Subscription, Change]] = []
+        while True:
+            batch = [self._queue.get()]
+            while len(batch) < _BATCH:  # what is queued already is handled, then delivered
+                try:
+                    batch.append(self._queue.get_nowait())
+                except queue.Empty:
+                    break
+            for item in batch:
+                if item is None:
+                    self._deliver(out)
+                    return
+                self._step(*item, out)
+            self._deliver(out)
+
+    def _step(self, sub: Subscription, payload: object, out: list) -> None:
+        with self._lock:
+            alive = sub in self._subs
+        if not alive:
+            return
+        if payload is None:
+            sub.ready = True
+            if sub.initial is not None:
+                out.append((sub, sub.initial))
+                sub.initial = None
+            early, sub.early = sub.early, []
+            for entry in early:
+                self._process(sub, entry, out)
+        elif isinstance(payload, _Behind):
+            if sub.ready:
+                self._add(out, sub, sub.behind(payload.seq, self._fetch_log))
+        elif not sub.ready:
+            sub.early.append(payload)
+        else:
+            self._process(sub, payload, out)
+
+    def _process(self, sub: Subscription, item: object, out: list) -> None:
+        try:
+            changes = sub.receive(item, self._fetch_log)
+        except MalformedPayload as exc:
+            log.warning("malformed change skipped: %s", exc)
+            return
+        self._add(out, sub, changes)
+
+    @staticmethod
+    def _add(out: list[tuple[Subscription, Change]], sub: Subscription, changes: list) -> None:
+        """Queue changes for delivery; parts of one changeset arriving together become one."""
+        for change in changes:
+            if out and out[-1][0] is sub and sub.merges and _same(out[-1][1], change):
+                last = out[-1][1]
+                last.added += change.added
+                last.removed += change.removed
+                last.inferred_added += change.inferred_added
+                last.inferred_removed += change.inferred_removed
+                last.bindings += change.bindings
+            else:
+                out.append((sub, change))
+
+    def _deliver(self, out: list[tuple[Subscription, Change]]) -> None:
+        for sub, change in out:
+            with self._lock:
+                alive = sub in self._subs
+            if not alive:
+                continue
+            try:
+                sub.callback(change)
+            except Exception:  # a user's callback must not stop delivery to the others
+                log.exception("subscription callback failed on change %s", change.id)
+        out.clear()
+
+
+def _same(a: Change, b: Change) -> bool:
+    return a.seq == b.seq and a.id == b.id
