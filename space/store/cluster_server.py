@@ -179,6 +179,8 @@ class ClusterStoreServer:
             q(f"{root}/*/{keys.ASSERTED}/**", "keys"),
             q(f"{root}/*/{keys.INFERRED}/**", "keys"),
             q(f"{root}/@repl/spaces", "spaces"),
+            # As the embedded store's: subscribers catch up from the log when it comes back.
+            s.liveliness().declare_token(f"{root}/@leader/{s.zid()}"),
         ]
 
     def _on_query(self, kind: str) -> Callable[[zenoh.Query], None]:

@@ -297,6 +297,9 @@ class StoreServer:
             s.declare_queryable(f"{root}/*/{keys.ASSERTED}/**", on_query("keys")),
             s.declare_queryable(f"{root}/*/{keys.INFERRED}/**", on_query("keys")),
             s.declare_queryable(f"{root}/@repl/spaces", on_query("spaces")),
+            # A subscriber that sees this token come back (a cut between us healed)
+            # fetches what it missed from the log (space.client, `_watch_store`).
+            s.liveliness().declare_token(f"{root}/@leader/{s.zid()}"),
         ]
 
     def _seqs(self) -> dict[str, int]:
