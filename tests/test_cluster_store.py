@@ -135,6 +135,19 @@ def test_a_functional_value_written_on_two_replicas_at_once_stays_one(
     assert values[0] == values[1] == values[2]
 
 
+def test_a_scoped_subscriber_gets_what_another_replica_decided(replicas: list[Server]) -> None:
+    """A part published on another (here unreachable) router is found through `prev`."""
+    at = URIRef(EX + "at")
+    seen: list = []
+    with _open(replicas[2], "parts") as c, _open(replicas[0], "parts") as a:
+        c.write([(_s(9), at, Literal("start"))])
+        c.subscribe(None, seen.append, scope=[(_s(1), None)])
+        first = a.write([(_s(1), at, Literal("dock"))])  # decided and published on replica 0
+        second = c.write([(_s(1), at, Literal("hall"))])  # its part names the first's seq
+        wait_for(lambda: len(seen) >= 2, 10, "both parts")
+        assert [x.seq for x in seen] == [first.seq, second.seq]
+
+
 def test_a_minority_replica_refuses_writes_and_reads(replicas: list[Server], etcd_cluster) -> None:
     triple = (_s(7), URIRef(EX + "at"), Literal("dock"))
     with _open(replicas[0], "cut") as ts:

@@ -367,7 +367,12 @@ class ClusterWriter:
                 flight.req.query.drop()
             for req in flight.followers:
                 answer(req, {**flight.reply(net), "again": True})
-        self._publisher.publish([(f.state, n) for f, n in ours])  # type: ignore[misc]
+        mine = {id(n): f for f, n in ours}
+        for state, net in nets:  # in log order: each part names the changeset before it
+            if id(net) in mine:
+                self._publisher.publish([(state, net)])
+            else:
+                self._publisher.note(state, net)
         self._release()
 
     def _release(self) -> None:
