@@ -15,7 +15,8 @@ if TYPE_CHECKING:
     from rdflib import Graph
 
 ORDER = 30
-PROGRESS_BYTES = 1_000_000  # documents from this size on get progress lines on stderr
+PROGRESS_BYTES = 1_000_000  # documents from this size on get a progress line as they are read
+PROGRESS_TRIPLES = 10_000  # changesets from this size on: the store takes seconds; say so
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -27,8 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "with --remove, remove those of another in the same changeset. Prints the changeset id; "
         "each added triple the store did not apply (a functional property holding a newer value) "
         "is printed on stderr with its reason, and with --strict makes the exit code 1. "
-        "A document with no triples is an error (nothing is written); big documents (1 MB and "
-        "more) get progress lines on stderr.",
+        "A document with no triples is an error (nothing is written); big ones get progress "
+        "lines on stderr (reading 1 MB and more, sending 10,000 triples and more).",
     )
     p.add_argument("file", nargs="?", metavar="FILE|-", help="Turtle document to add")
     p.add_argument("--remove", metavar="FILE|-", help="Turtle document whose triples to remove")
@@ -72,13 +73,17 @@ def run(args: argparse.Namespace) -> int:
             removed if removed is not None else (),
             lifespan=args.lifespan or 0,
         )
-        big = any(_size(source) >= PROGRESS_BYTES for source in (args.file, args.remove))
+        count = len(cs.added) + len(cs.removed)
+        big = count >= PROGRESS_TRIPLES or any(
+            _size(source) >= PROGRESS_BYTES for source in (args.file, args.remove)
+        )
+        started = time.monotonic()
         if big:
-            _say(f"sending one changeset of {len(cs.added) + len(cs.removed)} triples…")
+            _say(f"sending one changeset of {count} triples…")
         ack = ts.send(cs, timeout=args.timeout, strict=False)
         print(ack, file=sys.stdout)
         if big:
-            _say("written")
+            _say(f"written in {time.monotonic() - started:.1f} s")
     for dropped in ack.dropped:
         s, p, o = (term.n3() for term in dropped.triple)
         print(f"tspace: not applied: {s} {p} {o} .: {dropped.reason}", file=sys.stderr)
