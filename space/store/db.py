@@ -204,20 +204,28 @@ class StoreDB:
         self,
         entries: list[Entry],
         extra: tuple[list[ox.Quad], list[ox.Quad]] = ([], []),
+        *,
+        revision: int | None = None,
     ) -> None:
         """Write a batch of changesets with their log entries and seqs, atomically.
 
         `extra`: quads to delete and to insert in the same update (leases).
+        `revision`: a cluster replica's applied etcd revision, written in the
+        same update (`space.store.cluster_db`), so a restart resumes there.
 
         Raises:
             CommitFailed: nothing of the batch was written.
         """
-        if not entries and not any(extra):
+        if not entries and not any(extra) and revision is None:
             return
         ops = [op for e in entries for op in _operations(e)]
         for verb, quads in zip(("DELETE", "INSERT"), extra, strict=True):
             if quads:
                 ops.append(f"{verb} DATA {{ {_quads(quads)} }}")
+        if revision is not None:
+            from space.store.cluster_db import revision_ops
+
+            ops += revision_ops(revision)
         text = " ;\n".join(ops)
         try:
             self.store.update(text)
@@ -226,7 +234,7 @@ class StoreDB:
         except (OSError, RuntimeError) as exc:
             raise CommitFailed(f"the database could not commit: {exc}") from exc
         self._commits += len(entries)
-        if self._commits >= 1000:
+        if self._commits >= 1000 and entries:
             self._commits = 0
             self._compact({e.space: e.seq for e in entries})
 
