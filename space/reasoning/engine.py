@@ -10,7 +10,7 @@ each firing's changes fully applied (closure included) before the next.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 from rdflib import OWL, BNode, Graph, URIRef
@@ -22,24 +22,23 @@ from space.reasoning.builtins import Context, Registry, default_registry
 from space.reasoning.changes import ChangeLog
 from space.reasoning.checks import check_rule, mark_shared_names
 from space.reasoning.compile import CompiledRule, RuleIndex
-from space.reasoning.conflicts import Conflict, read_conflicts
-from space.reasoning.delta import Delta, Firing, Origin, Why
+from space.reasoning.delta import Delta, Firing
 from space.reasoning.errors import RuleError, RuleLoopError
 from space.reasoning.forms import value_patterns
 from space.reasoning.joins import JoinCompiler, Match
 from space.reasoning.owl import owl_rules
 from space.reasoning.parser import load_rules
 from space.reasoning.rdffiles import rdf_graph, read_graph
+from space.reasoning.reading import EngineReads
 from space.reasoning.rules import Rule
 from space.reasoning.support import Support
 from space.reasoning.terms import TermTable
 from space.reasoning.triples import T, TripleStore
-from space.reasoning.view import live_graph
 from space.reasoning.withdraw import Withdrawals, withdrawable
 from space.terms import Triple
 
 
-class RuleEngine:
+class RuleEngine(EngineReads):
     """Keep a set of triples closed under rules; update it incrementally.
 
     Args:
@@ -115,76 +114,6 @@ class RuleEngine:
         parsed = load_rules(rules, registry)  # type: ignore[arg-type]
         return cls(parsed, read_graph(ontology), registry=registry, **options)  # type: ignore[arg-type]
 
-    @property
-    def graph(self) -> Graph:
-        """Return the current state (asserted and inferred) as a live, read-only rdflib Graph.
-
-        It reads the engine through `match` on every lookup: after an update it
-        shows the new state at once, and reading costs what is read.
-        """
-        if self._graph is None:
-            self._graph = live_graph(self)
-        return self._graph
-
-    def count(self) -> int:
-        """Return how many triples the state holds (asserted and inferred)."""
-        if self.terms.hidden:  # `hide` was called: count what is listed
-            return sum(1 for t in self._store if self.terms.shown(t))
-        osp, functors = self._store.osp, self.terms.functors
-        unlisted = sum(len(ps) for f in functors for ps in osp.get(f, {}).values())
-        return len(self._store) - unlisted
-
-    def triples(self, origin: Origin | None = None) -> Iterator[Triple]:
-        """Yield the current triples, or only the asserted or only the inferred ones."""
-        functors, hidden = self.terms.functors, self.terms.hidden
-        for t in self._store:
-            if t[2] in functors or t[0] in functors:
-                continue
-            if hidden and (t[0] in hidden or t[1] in hidden or t[2] in hidden):
-                continue
-            if origin is None or (t in self._asserted) == (origin is Origin.ASSERTED):
-                yield self._decode(t)
-
-    def match(
-        self, subject: Node | None = None, predicate: Node | None = None, obj: Node | None = None
-    ) -> Iterator[Triple]:
-        """Yield the current triples that match a pattern (None matches anything).
-
-        Costs what matches, through the indexes: unlike `graph`, nothing is
-        rebuilt after an update, so a caller may look things up on every change.
-        """
-        pattern = (subject, predicate, obj)
-        ids = [None if x is None else self.terms.find(x) for x in pattern]
-        if any(i is None and x is not None for i, x in zip(ids, pattern, strict=True)):
-            return  # a term the engine never saw: nothing matches
-        functors, hidden = self.terms.functors, self.terms.hidden  # as TermTable.shown, inlined
-        for t in self._store.match(*ids):
-            if t[2] in functors or t[0] in functors:
-                continue
-            if hidden and (t[0] in hidden or t[1] in hidden or t[2] in hidden):
-                continue
-            yield self._decode(t)
-
-    def __contains__(self, triple: object) -> bool:
-        ids = tuple(self.terms.find(x) for x in triple) if isinstance(triple, tuple) else ()
-        if len(ids) == 3 and ids[0] == ids[2] and ids[0] is not None and ids[1] == self._same:
-            return self._in_state(ids[0])  # eq-ref, answered rather than stored
-        if len(ids) != 3 or ids not in self._store:
-            return False
-        return not self.terms.hidden or self.terms.shown(ids)  # type: ignore[arg-type]
-
-    def _in_state(self, term: int) -> bool:
-        store = self._store
-        return term in store.spo or term in store.pos or term in store.osp
-
-    def conflicts(self) -> tuple[Conflict, ...]:
-        """Return the conflicts that hold now (OWL 2 RL rules with head `false`), sorted.
-
-        Costs what the conflicts are. A conflict goes when one of its triples does.
-        """
-        labels = [c.label for c in self._compiled]
-        return read_conflicts(self.terms, self._store, self._support, labels)
-
     def load(self, triples: Graph | Iterable[Triple] = ()) -> Delta:
         """Assert the initial state (with the ontology) and run the rules to a fixpoint.
 
@@ -252,21 +181,6 @@ class RuleEngine:
         self._graph = None
         return self._log.delta(())
 
-    def why(self, triple: Triple) -> Why | None:
-        """Return why a triple holds: asserted, or a rule and its premises; None if it does not."""
-        t = tuple(self.terms.find(x) for x in triple)
-        if t not in self._store:
-            return None
-        if t in self._asserted:
-            by = self._asserted_by.get(t)  # type: ignore[arg-type]
-            return Why(True) if by is None else Why(True, *self._explain(by))
-        found = self._support.first(t)  # type: ignore[arg-type]
-        return Why(False, *self._explain(found)) if found else None
-
-    def _explain(self, derivation: tuple[int, tuple[T, ...]]) -> tuple[str, tuple[Triple, ...]]:
-        rule, premises = derivation
-        return self._compiled[rule].label, tuple(self._decode(p) for p in premises)
-
     def _encode(self, triple: Triple) -> T:
         if not isinstance(triple, tuple | list) or len(triple) != 3:
             raise InputError(f"a triple is three terms, got {triple!r}")
@@ -279,9 +193,6 @@ class RuleEngine:
             raise InputError(f"not an RDF triple of rdflib terms: {triple!r}")
         term = self.terms.id
         return (term(s), term(p), term(o))
-
-    def _decode(self, t: T) -> Triple:
-        return self.terms.triple(t)  # type: ignore[return-value]
 
     def _assert(self, triples: Iterable[T], by: tuple[int, tuple[T, ...]] | None) -> None:
         """Assert triples and propagate through the monotonic rules."""
