@@ -211,6 +211,27 @@ class TripleSpace:
         """
         return Pending(self.session, self._key("write"), cs.encode(), timeout, what="write")
 
+    def send_rows_later(
+        self,
+        added: list[list[str]],
+        *,
+        prefixes: dict[str, str] | None = None,
+        timeout: float = 5.0,
+    ) -> tuple[str, Pending]:
+        """Send triples given as `[s, p, o]` N-Triples texts as one changeset; ack read later.
+
+        The bulk twin of `send_later`, for texts a parser made already (`tspace
+        write` of a big document): no rdflib term is made. Returns the changeset's
+        id and its pending reply (`Ack.of(id, pending.result())`).
+        """
+        cs = Changeset(
+            agent=self.agent,
+            timestamp=str(self.session.new_timestamp()),
+            prefixes=dict(prefixes or {}),
+        )
+        payload = cs.encode([added, [], [], []])
+        return cs.id, Pending(self.session, self._key("write"), payload, timeout, what="write")
+
     def send_nowait(self, cs: Changeset) -> str:
         """Send a changeset without waiting (fire-and-forget twin of `send`); return its id."""
         self.session.put(

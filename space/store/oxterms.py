@@ -165,12 +165,13 @@ def parse_rows(rows: list) -> tuple[list[OxTriple], bool]:
 def plain_rows(rows: list) -> list[list[str]] | None:
     """Return `[s, p, o]` texts that are already their stored triples' own text; else None.
 
-    Plain means: every row one valid triple (as `parse_rows` checks it), and
-    no escape, language tag or blank node in it, and every XSD-typed literal a
-    canonical integer. Such texts are what the store holds, publishes and
-    answers, term for term, so a changeset of them is decided and committed
-    as text (`render.py`), no term of it becoming a Python object. None: the
-    caller parses the rows term by term (`triples`), which says what is wrong.
+    Plain means: every row one valid triple (as `parse_rows` checks it), no
+    escape, language tag or blank node in it, and every XSD-typed literal an
+    integer, decimal, double or boolean in its canonical form. Such texts are
+    what the store holds, publishes and answers, term for term, so a changeset
+    of them is decided and committed as text (`render.py`), no term of it
+    becoming a Python object. None: the caller parses the rows term by term
+    (`triples`), which says what is wrong.
     """
     try:
         document = "".join([f"{s} {p} {o} .\n" for s, p, o in rows])
@@ -180,7 +181,7 @@ def plain_rows(rows: list) -> list[list[str]] | None:
         "\\" in document
         or '"@' in document
         or "_:" in document
-        or document.count(_XSD_TYPED) != len(_CANONICAL_INTEGERS.findall(document))
+        or document.count(_XSD_TYPED) != len(_CANONICAL_VALUES.findall(document))
         or document.count("\n") != len(rows)
         or _DOCUMENT_RE.fullmatch(document) is None
         or max(map(len, chain.from_iterable(rows)), default=0) > MAX_TERM
@@ -197,8 +198,13 @@ _IRI = r'<[^<>"{}|^`\\\x00-\x20]*>'
 _BLANK = r"_:[A-Za-z0-9_](?:[A-Za-z0-9_.\-]*[A-Za-z0-9_\-])?"
 _LITERAL = r'"[^"\\\n\r]*(?:\\.[^"\\\n\r]*)*"(?:\^\^' + _IRI + r"|@[A-Za-z]+(?:-[A-Za-z0-9]+)*)?"
 _XSD_TYPED = '"^^<http://www.w3.org/2001/XMLSchema#'
-_CANONICAL_INTEGERS = re.compile(
-    r'"(?:0|-?[1-9][0-9]*)"\^\^<http://www\.w3\.org/2001/XMLSchema#integer> \.\n'
+_CANONICAL_VALUES = re.compile(  # XSD literals Oxigraph holds in the very same form
+    r'"(?:0|-?[1-9][0-9]{0,17})"\^\^<http://www\.w3\.org/2001/XMLSchema#integer> \.\n'
+    r'|"(?:0|-?[1-9][0-9]{0,14}|-?(?:0|[1-9][0-9]{0,14})\.[0-9]{0,14}[1-9])"'
+    r"\^\^<http://www\.w3\.org/2001/XMLSchema#decimal> \.\n"
+    r'|"(?:0|-?[1-9][0-9]{0,14}|-?(?:0|[1-9][0-9]{0,6})\.[0-9]{0,6}[1-9])"'
+    r"\^\^<http://www\.w3\.org/2001/XMLSchema#double> \.\n"
+    r'|"(?:true|false)"\^\^<http://www\.w3\.org/2001/XMLSchema#boolean> \.\n'
 )
 _DOCUMENT_RE = re.compile(
     rf"(?:(?:{_IRI}|{_BLANK}) (?!<{SKOLEM}){_IRI} (?:{_IRI}|{_BLANK}|{_LITERAL}) \.\n)*"
