@@ -28,12 +28,14 @@ from agents.vocabulary import RECORD_PREFIX, local_name, robot_iri
 from agents.writes import Writes
 from space import (
     Change,
+    InputError,
     SpaceError,
     SpaceTimeout,
     SpaceUnavailable,
     Subscription,
     TripleSpace,
     add_connect,
+    check_lifespan,
     declare_agent,
     freeze_startup,
     identity_of,
@@ -96,6 +98,8 @@ class Agent:
         self._inbox: queue.SimpleQueue[Change | Callable[[], None] | None] = queue.SimpleQueue()
         self._stop = threading.Event()
         self._early: list[Callable[[], None]] = []
+        self._leased: dict[tuple[Node, Node], Node] = {}  # values set, renewed while alive
+        self._next_renewal = 0.0
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -122,6 +126,7 @@ class Agent:
                         agent=self.name,
                         config_file=self.args.config,
                         identity=identity_of(self.args, self.name),
+                        lifespan=self.args.lifespan,
                     )
                     self._token = declare_agent(self.ts.session, self.ts.space, self.name)
                 self._subscription = self.subscribe()
@@ -171,6 +176,7 @@ class Agent:
             self._surface_failed_writes()
             if self.started and (changed or time.monotonic() >= next_tick):
                 self._guarded(self.tick, "tick")
+                self._guarded(self._renew, "renewal")
                 next_tick = time.monotonic() + self.args.tick
             elif not self.started:
                 next_tick = time.monotonic() + self.args.tick
@@ -249,6 +255,12 @@ class Agent:
         """
         assert self.ts is not None
         added, removed = [], []
+        if self.args.lifespan:
+            for (s, p), o in values.items():
+                if o is None:
+                    self._leased.pop((s, p), None)
+                else:
+                    self._leased[(s, p)] = o
         for (s, p), o in values.items():
             old = self.view.objects(s, p)
             if o is not None and old == [o]:
@@ -280,6 +292,21 @@ class Agent:
             if all(t in self.view.graph for t in failed.added):
                 self.view.remove(failed.added)
                 self.view.add(failed.removed)
+
+    def _renew(self) -> None:
+        """Write again, every third of `--lifespan`, the values this agent set and still holds.
+
+        So they live as long as the agent does, and expire a lifespan after it
+        dies or is cut off (the store retracts them; the rules see it).
+        """
+        if not self.args.lifespan or time.monotonic() < self._next_renewal:
+            return
+        assert self.ts is not None
+        self._next_renewal = time.monotonic() + self.args.lifespan / 3
+        held = [(s, p, o) for (s, p), o in self._leased.items() if o in self.view.objects(s, p)]
+        if held:  # pipelined like every write; a renewal not taken is only logged
+            cs = self.ts.changeset(held)
+            self.writes.track(cs.id, self.ts.send_later(cs, timeout=self.args.timeout), [], [])
 
     # Hooks
 
@@ -323,9 +350,23 @@ def build_parser(cls: type[Agent], prog: str | None = None) -> argparse.Argument
         metavar="SECONDS",
         help="how long to wait for a router and the store at start (default 30)",
     )
+    parser.add_argument(
+        "--lifespan",
+        type=_lifespan,
+        metavar="DURATION",
+        help="the values this agent writes expire DURATION (500ms, 5s, 2m) after it stops "
+        "renewing them, i.e. after it dies (default: permanent)",
+    )
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     cls.add_arguments(parser)
     return parser
+
+
+def _lifespan(text: str) -> float | None:
+    try:
+        return check_lifespan(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from exc
 
 
 def run_agent(cls: type[Agent], argv: Sequence[str] | None = None, prog: str | None = None) -> int:

@@ -81,7 +81,10 @@ class Behavior(Agent):
         return Situation(
             now=self.clock.now(),
             task=v.task_type(v.value(robot, AC.current_task)),
-            requested=v.task_type(v.value(robot, AC.requested_task)),
+            # No battery reading (its monitor is gone, rules say so): take no new task.
+            requested=None
+            if v.value(robot, AC.battery_unknown) is not None
+            else v.task_type(v.value(robot, AC.requested_task)),
             location=_name(v.value(robot, AC.location)),
             navigation=v.text(robot, AC.navigation_status),
             battery=v.text(v.device(robot, AC.Battery), AC.battery_level),

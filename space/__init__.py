@@ -33,6 +33,7 @@ from space.identity import Identity, load_identity
 from space.keys import ROOT as KEY_ROOT
 from space.keys import escape as escape_key_chunk
 from space.keys import unescape as unescape_key_chunk
+from space.lifespan import check_lifespan
 from space.mirror import ChangeRecord, SpaceMirror
 from space.prefixes import PrefixMap
 from space.presence import alive_agents, declare_agent, watch_agents
@@ -81,6 +82,7 @@ __all__ = [
     "alive_agents",
     "any_free_port",
     "check_can_listen",
+    "check_lifespan",
     "declare_agent",
     "declares_functional",
     "default_data_dir",

@@ -37,8 +37,8 @@ def table(
     *,
     sort: bool = False,
 ) -> str:
-    """Return an aligned text table of terms, rows sorted by their text if `sort`."""
-    cells = [[term_text(t, prefixes) for t in row] for row in rows]
+    """Return an aligned text table of terms (or plain `str` cells), rows sorted if `sort`."""
+    cells = [[t if type(t) is str else term_text(t, prefixes) for t in row] for row in rows]
     if sort:
         cells.sort()
     widths = [max([len(h), *(len(r[i]) for r in cells)]) for i, h in enumerate(header)]

@@ -35,6 +35,7 @@ class Changeset:
     inferred_removed: list[Triple] = field(default_factory=list)
     prefixes: dict[str, str] = field(default_factory=dict)
     seq: int = 0
+    lifespan: float | None = None  # seconds the added triples live unless written again
 
     def is_empty(self) -> bool:
         """Return True when the changeset changes nothing."""
@@ -56,6 +57,8 @@ class Changeset:
             wire["cause"] = self.cause
         if self.seq:
             wire["seq"] = self.seq
+        if self.lifespan is not None:
+            wire["lifespan"] = self.lifespan
         if self.prefixes:
             wire["prefixes"] = self.prefixes
         if texts is None:
@@ -100,6 +103,7 @@ class Changeset:
                 inferred_removed=lists[3],
                 prefixes={str(k): str(v) for k, v in prefixes.items()},
                 seq=seq if seq is not None else int(wire.get("seq") or 0),
+                lifespan=float(wire["lifespan"]) if wire.get("lifespan") else None,
             )
         except (TypeError, ValueError) as exc:
             raise MalformedPayload(f"bad changeset field: {exc}") from exc

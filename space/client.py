@@ -32,6 +32,7 @@ from space.errors import (
     TemplateError,
 )
 from space.explanation import Explanation
+from space.lifespan import check_lifespan
 from space.prefixes import PrefixMap
 from space.request import Pending, ask_store
 from space.session import open_session
@@ -65,10 +66,12 @@ class TripleSpace:
         prefixes: dict[str, str] | None = None,
         strict: bool = False,
         writer: str | None = None,
+        lifespan: float | None = None,
         _owns_session: bool = False,
     ) -> None:
         self.session = session
         self.strict = strict
+        self.lifespan = check_lifespan(lifespan)  # the default of every write (None: permanent)
         self.space = keys.check_space(space)
         # In a secure space a router lets each identity write (and take) only on
         # keys that end with its own name, so the store knows who wrote.
@@ -92,6 +95,7 @@ class TripleSpace:
         prefixes: dict[str, str] | None = None,
         strict: bool = False,
         identity: Identity | None = None,
+        lifespan: float | None = None,
     ) -> TripleSpace:
         """Open a session to the routers at `connect` and a handle on `space`.
 
@@ -101,6 +105,8 @@ class TripleSpace:
         store did not apply raises `NotApplied` (see `send`). With `identity`
         (`space.load_identity`), every link is mutual TLS with its certificate,
         and writes go under its name.
+        `lifespan`: the default lifespan in seconds of every write of this handle
+        (see `write`).
 
         Raises:
             InputError: `space` is not a legal space name (checked before connecting).
@@ -119,6 +125,7 @@ class TripleSpace:
                 prefixes=prefixes,
                 strict=strict,
                 writer=writer,
+                lifespan=lifespan,
                 _owns_session=True,
             )
         except BaseException:
@@ -169,12 +176,19 @@ class TripleSpace:
         inferred_added: Triples = (),
         inferred_removed: Triples = (),
         cause: str | None = None,
+        lifespan: float | None = None,
     ) -> Changeset:
-        """Build a stamped changeset (not yet sent) from triples or graphs."""
+        """Build a stamped changeset (not yet sent) from triples or graphs.
+
+        `lifespan`: seconds after which the store retracts the added triples
+        that no later write asserted again (None: the handle's default; 0: permanent).
+        """
+        life = self.lifespan if lifespan is None else lifespan
         cs = Changeset(
             agent=self.agent,
             timestamp=str(self.session.new_timestamp()),
             cause=cause,
+            lifespan=check_lifespan(life) or None,
             added=list(added),
             removed=list(removed),
             inferred_added=list(inferred_added),
@@ -216,18 +230,22 @@ class TripleSpace:
         added: list[list[str]],
         *,
         prefixes: dict[str, str] | None = None,
+        lifespan: float | None = None,
         timeout: float = 5.0,
     ) -> tuple[str, Pending]:
         """Send triples given as `[s, p, o]` N-Triples texts as one changeset; ack read later.
 
         The bulk twin of `send_later`, for texts a parser made already (`tspace
-        write` of a big document): no rdflib term is made. Returns the changeset's
-        id and its pending reply (`Ack.of(id, pending.result())`).
+        write` of a big document): no rdflib term is made. `lifespan` as in
+        `changeset`. Returns the changeset's id and its pending reply
+        (`Ack.of(id, pending.result())`).
         """
+        life = self.lifespan if lifespan is None else lifespan
         cs = Changeset(
             agent=self.agent,
             timestamp=str(self.session.new_timestamp()),
             prefixes=dict(prefixes or {}),
+            lifespan=check_lifespan(life) or None,
         )
         payload = cs.encode([added, [], [], []])
         return cs.id, Pending(self.session, self._key("write"), payload, timeout, what="write")
@@ -246,13 +264,21 @@ class TripleSpace:
         timeout: float = 5.0,
         cause: str | None = None,
         strict: bool | None = None,
+        lifespan: float | None = None,
     ) -> Ack:
-        """Add triples as one changeset; block until durable; return the ack (see `send`)."""
-        return self.send(self.changeset(triples, cause=cause), timeout=timeout, strict=strict)
+        """Add triples as one changeset; block until durable; return the ack (see `send`).
 
-    def write_nowait(self, triples: Triples, *, cause: str | None = None) -> str:
+        `lifespan`: seconds until the store retracts them, unless written again
+        before (a write renews); None takes the handle's default, 0 is permanent.
+        """
+        cs = self.changeset(triples, cause=cause, lifespan=lifespan)
+        return self.send(cs, timeout=timeout, strict=strict)
+
+    def write_nowait(
+        self, triples: Triples, *, cause: str | None = None, lifespan: float | None = None
+    ) -> str:
         """Add triples without waiting for the store (for high-rate sensor data)."""
-        return self.send_nowait(self.changeset(triples, cause=cause))
+        return self.send_nowait(self.changeset(triples, cause=cause, lifespan=lifespan))
 
     def remove(self, triples: Triples, *, timeout: float = 5.0, cause: str | None = None) -> Ack:
         """Remove triples as one changeset; block until durable."""
@@ -268,6 +294,7 @@ class TripleSpace:
         cause: str | None = None,
         timeout: float = 5.0,
         strict: bool | None = None,
+        lifespan: float | None = None,
     ) -> Ack:
         """Apply removals then additions atomically, as one changeset; return the ack (`send`)."""
         cs = self.changeset(
@@ -276,6 +303,7 @@ class TripleSpace:
             inferred_added=inferred_added,
             inferred_removed=inferred_removed,
             cause=cause,
+            lifespan=lifespan,
         )
         return self.send(cs, timeout=timeout, strict=strict)
 
@@ -331,6 +359,19 @@ class TripleSpace:
         t = self._template(template)
         reply = self._ask({"op": "query", "template": t.to_wire(), "graph": graph}, timeout)
         return list(dict.fromkeys(_triples(reply)))
+
+    def lifespans(
+        self, template: TemplateLike = None, *, timeout: float = 5.0
+    ) -> list[tuple[Triple, float | None]]:
+        """Return each matching asserted triple with the seconds it has left (None: permanent)."""
+        t = self._template(template)
+        request = {"op": "query", "template": t.to_wire(), "graph": "asserted", "lifespan": True}
+        reply = self._ask(request, timeout)
+        rows = reply.get(keys.ASSERTED) or []
+        left = reply.get("lifespan") or [None] * len(rows)
+        if not isinstance(left, list) or len(left) != len(rows):
+            raise MalformedPayload("a lifespan reply has one remaining life per triple")
+        return [(triple_from_nt(r), life) for r, life in zip(rows, left, strict=True)]
 
     def take(self, template: TemplateLike = None, *, timeout: float = 5.0) -> Graph:
         """Remove every matching asserted triple and return them, atomically at the store.

@@ -11,7 +11,7 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from space import InputError
+from space import InputError, check_lifespan
 
 
 @dataclass(frozen=True)
@@ -90,7 +90,8 @@ def _agents(entries: object, robots: tuple[str, ...], base: Path) -> tuple[Agent
     for entry in entries:
         if not isinstance(entry, dict) or not isinstance(entry.get("name"), str):
             raise InputError(f"every [[agent]] needs a name: {entry!r}")
-        unknown = set(entry) - {"name", "module", "args", "per_robot", "restart", "paths"}
+        known = {"name", "module", "args", "per_robot", "restart", "paths", "lifespan"}
+        unknown = set(entry) - known
         if unknown:
             raise InputError(f"agent {entry['name']}: unknown keys {sorted(unknown)}")
         name = entry["name"]
@@ -101,6 +102,13 @@ def _agents(entries: object, robots: tuple[str, ...], base: Path) -> tuple[Agent
             for index, arg in enumerate(args[:-1]):
                 if arg == flag:
                     args[index + 1] = str((base / args[index + 1]).resolve())
+        if "lifespan" in entry:  # the agent's default lifespan for what it writes
+            try:
+                life = check_lifespan(entry["lifespan"])
+            except InputError as exc:
+                raise InputError(f"agent {name}: {exc}") from exc
+            if life:
+                args += ["--lifespan", f"{life:g}s"]
         module = entry.get("module", f"agents.{name}")
         restart = bool(entry.get("restart", True))
         for_robots: tuple[str | None, ...] = robots if entry.get("per_robot", False) else (None,)

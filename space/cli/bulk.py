@@ -55,12 +55,14 @@ def send(
     total: int,
     prefixes: dict[str, str],
     *,
+    lifespan: float | None,
     timeout: float,
     say: Callable[[str], None],
 ) -> list[Ack]:
     """Send a checked document (`check`) as changesets, pipelined; return their acks in order.
 
-    `timeout` applies to each changeset. Says its progress about once a second.
+    `lifespan`: of every triple (None: permanent); `timeout` applies to each
+    changeset. Says its progress about once a second.
 
     Raises:
         what `TripleSpace.send` raises, for the first changeset that fails; those
@@ -72,7 +74,9 @@ def send(
     started = shown = time.monotonic()
     first = dict(list(prefixes.items())[:MAX_PREFIXES])
     for chunk in _chunks(source):
-        ident, pending = ts.send_rows_later(chunk, prefixes=first, timeout=timeout)
+        ident, pending = ts.send_rows_later(
+            chunk, prefixes=first, lifespan=lifespan, timeout=timeout
+        )
         first = {}
         in_flight.append((ident, pending, len(chunk)))
         while len(in_flight) >= WINDOW:

@@ -32,22 +32,33 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="all",
         help="for templates: which graph (default all)",
     )
+    p.add_argument(
+        "--with-lifespan",
+        action="store_true",
+        help="for templates: asserted triples only, with the seconds each has left to live",
+    )
     add_connect(p, space=None)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Ask the store and print the answer on stdout."""
-    from space.cli.results import print_sparql, print_template
+    from space.cli.results import print_lifespans, print_sparql, print_template
 
     if (args.sparql is None) == (args.template is None):
         raise UsageError("give either SPARQL text or --template")
+    if args.with_lifespan and (args.template is None or args.format == "turtle"):
+        raise UsageError("--with-lifespan goes with --template, as a table or JSON")
     with open_space(args, agent="tspace-query") as ts:
         prefixes = ts.load_prefixes(timeout=args.timeout)
         if args.template is not None:
             from space.template import Template
 
             template = Template.parse(args.template, prefixes)
+            if args.with_lifespan:
+                lives = ts.lifespans(template, timeout=args.timeout)
+                print_lifespans(lives, prefixes, args.format, sys.stdout)
+                return 0
             triples = ts.match(template, graph=args.graph, timeout=args.timeout)
             print_template(template, triples, prefixes, args.format, sys.stdout)
         else:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import TextIO
 
-from rdflib import Graph
+from rdflib import Graph, Literal
 from rdflib.query import Result
 
 from space._display import sparql_json, table
@@ -46,6 +46,19 @@ def print_template(
         out.write(sparql_json(names, rows) + "\n")
     else:
         out.write(table(names, rows, prefixes, sort=True) + "\n")
+
+
+def print_lifespans(
+    lives: list[tuple[Triple, float | None]], prefixes: PrefixMap, fmt: str, out: TextIO
+) -> None:
+    """Write triples with their remaining life in seconds (`permanent` if they have none)."""
+    names = ["s", "p", "o", "lifespan"]
+    if fmt == "json":
+        rows = [(*t, None if left is None else Literal(round(left, 3))) for t, left in lives]
+        out.write(sparql_json(names, rows) + "\n")
+        return
+    texts = [(*t, "permanent" if left is None else f"{left:.3f}") for t, left in lives]
+    out.write(table(names, texts, prefixes, sort=True) + "\n")
 
 
 def print_sparql(result: Result, prefixes: PrefixMap, fmt: str, out: TextIO) -> None:

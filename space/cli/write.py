@@ -12,7 +12,7 @@ import time
 from typing import TYPE_CHECKING
 
 from space.cli.options import add_connect, open_space
-from space.errors import UsageError
+from space.errors import InputError, UsageError
 
 if TYPE_CHECKING:
     from rdflib import Graph
@@ -45,13 +45,28 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="send a big document as one changeset too: all of it or nothing "
         "(at most 100,000 triples, the store's limit)",
     )
+    p.add_argument(
+        "--lifespan",
+        type=_lifespan,
+        metavar="DURATION",
+        help="retract the added triples after DURATION (500ms, 5s, 2m, 1h) unless written "
+        "again; default: permanent",
+    )
     add_connect(p, space=None)
     p.set_defaults(func=run)
 
 
+def _lifespan(text: str) -> float:
+    from space.lifespan import check_lifespan
+
+    try:
+        return check_lifespan(text) or 0.0
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from exc
+
+
 def run(args: argparse.Namespace) -> int:
     """Parse the documents, then send one changeset and wait for the store."""
-    from space.errors import InputError
     from space.zconfig import make_config
 
     if args.file is None and args.remove is None:
@@ -69,7 +84,9 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"{name}: no triples in it; nothing written")
     with open_space(args, agent="tspace-write", create=True) as ts:
         cs = ts.changeset(
-            added if added is not None else (), removed if removed is not None else ()
+            added if added is not None else (),
+            removed if removed is not None else (),
+            lifespan=args.lifespan or 0,
         )
         big = any(_size(source) >= PROGRESS_BYTES for source in (args.file, args.remove))
         if big:
@@ -114,7 +131,15 @@ def _stream(args: argparse.Namespace) -> int:
         raise InputError(f"{args.file}: no triples in it; nothing written")
     _say(f"{total:,} triples in {time.monotonic() - started:.1f} s; sending…")
     with open_space(args, agent="tspace-write", create=True) as ts:
-        acks = bulk.send(ts, args.file, total, prefixes, timeout=args.timeout, say=_say)
+        acks = bulk.send(
+            ts,
+            args.file,
+            total,
+            prefixes,
+            lifespan=args.lifespan or 0,
+            timeout=args.timeout,
+            say=_say,
+        )
     for ack in acks:
         print(ack, file=sys.stdout)
     dropped = [d for ack in acks for d in ack.dropped]

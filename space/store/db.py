@@ -210,21 +210,27 @@ class StoreDB:
         for q in self.store.quads_for_pattern(*pattern, graph(space, which)):
             yield q.subject, q.predicate, q.object
 
-    def commit(self, entries: list[Entry]) -> None:
+    def commit(
+        self,
+        entries: list[Entry],
+        extra: tuple[list[ox.Quad], list[ox.Quad]] = ([], []),
+    ) -> None:
         """Write a batch of changesets with their log entries and seqs, atomically.
+
+        `extra`: quads to delete and to insert in the same update (leases).
 
         Raises:
             CommitFailed: nothing of the batch was written.
         """
         from space.store import render
 
-        if not entries:
+        if not entries and not any(extra):
             return
         try:
-            if render.plain(entries):
-                self.store.load(render.nquads(entries), format=ox.RdfFormat.N_QUADS)
+            if render.plain(entries) and not extra[0]:
+                self.store.load(render.nquads(entries, extra[1]), format=ox.RdfFormat.N_QUADS)
             else:
-                self.store.update(render.update(entries))
+                self.store.update(render.update(entries, extra))
             if self.durable:
                 self.store.flush()
         except (OSError, RuntimeError) as exc:

@@ -11,7 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from space.changeset import WIRE_VERSION, hlc_key, unpack
-from space.errors import MalformedPayload
+from space.errors import InputError, MalformedPayload
+from space.lifespan import check_lifespan
 from space.store import oxterms
 from space.store.oxterms import OxTerm, OxTriple
 
@@ -37,6 +38,7 @@ class WriteRequest:
     removed: list[OxTriple] = field(default_factory=list)
     inferred_added: list[OxTriple] = field(default_factory=list)
     inferred_removed: list[OxTriple] = field(default_factory=list)
+    lifespan: float | None = None  # seconds the added triples live (None: permanent)
     plain: list[list[str]] | None = None  # the additions, when only added and plain (oxterms)
 
     def parse_plain(self) -> None:
@@ -57,6 +59,7 @@ class QueryRequest:
     id: str = ""  # a take's request id: a retry gets the first outcome
     agent: str = ""
     ts: str = ""
+    lifespans: bool = False  # also answer each asserted triple's remaining life
 
 
 def _string(wire: dict, name: str, *, required: bool = False, limit: int = MAX_ID) -> str:
@@ -77,6 +80,13 @@ def _stamp(wire: dict) -> str:
     if ts:
         hlc_key(ts)
     return ts
+
+
+def _lifespan(wire: dict) -> float | None:
+    try:
+        return check_lifespan(wire.get("lifespan"))
+    except InputError as exc:
+        raise MalformedPayload(f"'lifespan': {exc}") from exc
 
 
 def _map(payload: bytes) -> dict:
@@ -103,6 +113,7 @@ def write_request(payload: bytes) -> WriteRequest:
         agent=_string(wire, "agent"),
         ts=_stamp(wire),
         cause=_string(wire, "cause") or None,
+        lifespan=_lifespan(wire),
     )
     prefixes = wire.get("prefixes") or {}
     if not isinstance(prefixes, dict) or len(prefixes) > MAX_PREFIXES:
@@ -165,6 +176,7 @@ def query_request(payload: bytes) -> QueryRequest:
     if graph not in GRAPHS:
         raise MalformedPayload(f"unknown graph {graph!r:.60} (all, asserted or inferred)")
     req.graph = GRAPHS[graph]
+    req.lifespans = wire.get("lifespan") is True
     if op == "take":
         if req.graph != "t":
             raise MalformedPayload("take removes asserted triples only (graph 'asserted')")

@@ -23,6 +23,7 @@ from space.request import TIME_LIMIT
 from space.store import oxterms
 from space.store.db import META, SEQ, StoreDB, graph, space_node
 from space.store.intake import QueryRequest
+from space.store.lifespans import remaining
 from space.terms import from_nt, to_nt
 
 MAX_KEY_REPLIES = 100_000  # replies to one GET on triple keys
@@ -59,7 +60,12 @@ def read(db: StoreDB, space: str, req: QueryRequest, deadline: Deadline) -> byte
     seq, found = _consistent(db, space, graphs, req.template, deadline)
     if req.op == "read":
         found = {g: _one_subject(ts) for g, ts in found.items()}
-    return pack({"seq": seq, **found})
+    reply: dict = {"seq": seq, **found}
+    if req.lifespans:
+        now = time.time()
+        asserted = found.get("t") or []
+        reply["lifespan"] = [remaining(db, space, oxterms.triple(t), now) for t in asserted]
+    return pack(reply)
 
 
 def _consistent(

@@ -36,9 +36,10 @@ def plain(entries: list[Entry]) -> bool:
     )
 
 
-def nquads(entries: list[Entry]) -> str:
-    """Return the N-Quads document of a batch of plain entries (see `plain`)."""
-    parts: list[str] = []
+def nquads(entries: list[Entry], extra: list[ox.Quad] = ()) -> str:  # type: ignore[assignment]
+    """Return the N-Quads document of a batch of plain entries (see `plain`), `extra` quads
+    (leases) with them."""
+    parts: list[str] = [f"{q} .\n" for q in extra]
     for e in entries:
         if e.plain:
             g = f" <{graph(e.space, 't').value}> .\n"
@@ -48,12 +49,30 @@ def nquads(entries: list[Entry]) -> str:
     return "".join(parts)
 
 
-def update(entries: list[Entry], *, fresh: bool = False) -> str:
+def update(
+    entries: list[Entry],
+    extra: tuple[list[ox.Quad], list[ox.Quad]] = ([], []),
+    *,
+    fresh: bool = False,
+) -> str:
     """Return the SPARQL UPDATE of a batch: each entry's DELETE DATA, then its INSERT DATA.
 
-    `fresh`: the space was just cleared (a replica's copy), so nothing is removed.
+    `extra`: quads to delete and to insert after them (leases). `fresh`: the
+    space was just cleared (a replica's copy), so nothing is removed.
     """
-    return " ;\n".join(op for e in entries for op in _operations(e, fresh=fresh))
+    ops = [op for e in entries for op in _operations(e, fresh=fresh)]
+    for verb, quads in zip(("DELETE", "INSERT"), extra, strict=True):
+        if quads:
+            ops.append(f"{verb} DATA {{ {_quads(quads)} }}")
+    return " ;\n".join(ops)
+
+
+def _quads(quads: list[ox.Quad]) -> str:
+    """Return quads as GRAPH blocks, one per graph (a write's leases share theirs)."""
+    by_graph: dict[str, list[str]] = {}
+    for q in quads:
+        by_graph.setdefault(str(q.graph_name), []).append(f"{q.subject} {q.predicate} {q.object}")
+    return " ".join(f"GRAPH {g} {{ {' . '.join(ts)} }}" for g, ts in by_graph.items())
 
 
 def _meta(e: Entry) -> list[ox.Quad]:

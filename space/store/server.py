@@ -30,6 +30,7 @@ from space.store import intake, queries
 from space.store.acks import AckGate
 from space.store.db import StoreDB
 from space.store.guard import WriteGuard, writer_of
+from space.store.lifespans import Leases
 from space.store.publish import Publisher
 from space.store.readers import Readers
 from space.store.replica import Replica
@@ -89,6 +90,7 @@ class StoreServer:
         self._db: StoreDB | None = None
         self._worker: threading.Thread | None = None
         self._writer: Writer | None = None
+        self._leases = Leases()
 
     def start(self, timeout: float = 10.0) -> None:
         """Open the database, find the leader or lead, then serve.
@@ -112,7 +114,9 @@ class StoreServer:
             publisher=self._publisher,
             max_spaces=self.max_spaces,
             guard=self.guard,
+            leases=self._leases,
         )
+        self._leases.load(self._db)
         replica = Replica(self.session, self.root, self._db, self._space, self._forget)
         for name in self._db.spaces():
             self._space(name)
@@ -182,7 +186,7 @@ class StoreServer:
                 self._writer.probe(self._readers.running)
                 next_beat = time.monotonic() + HEARTBEAT
             batch: list[Request] = []
-            wait = next_beat - time.monotonic()
+            wait = min(next_beat - time.monotonic(), self._expiry_wait())
             held = self._acks.wait_time()
             try:
                 item = self._queue.get(timeout=max(0.0, wait if held is None else min(wait, held)))
@@ -204,6 +208,8 @@ class StoreServer:
     def _handle(self, batch: list[Request]) -> None:
         pending: list[Pending] = []
         replicas: list[Request] = []
+        if self._roles.role == "leading":
+            self._writer.expire(pending)
         for req in batch:
             if req.kind == "replica":
                 replicas.append(req)
@@ -312,7 +318,15 @@ class StoreServer:
         state = self._spaces.get(name)
         if state is None:
             state = self._spaces[name] = SpaceState(name, self._db_())
+            state.leases = self._leases
         return state
+
+    def _expiry_wait(self) -> float:
+        """Return the seconds until the next lease expires (a heartbeat if none or following)."""
+        due = self._leases.next_due()
+        if due is None or self._roles.role != "leading":
+            return HEARTBEAT
+        return max(0.0, due - time.time())
 
     # What this store serves in each role (declared by `Roles`, on the worker).
 

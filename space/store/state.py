@@ -19,6 +19,7 @@ from space.prefixes import PrefixMap
 from space.store import oxterms
 from space.store.db import FUNCTIONAL, Entry, StoreDB
 from space.store.intake import LISTS, WriteRequest
+from space.store.lifespans import Leases
 from space.store.oxterms import OxTerm, OxTriple
 
 _TYPE, _FUNCTIONAL_CLASS = (ox.NamedNode(x) for x in FUNCTIONAL)
@@ -54,6 +55,7 @@ class SpaceState:
         self._refresh_functional = False
         self._plain_rows: set[Row] = set()  # the batch's plain additions (see `decide`)
         self._plain_subjects: set[str] = set()
+        self.leases: Leases | None = None  # the store's, once it serves this space
 
     def settle(self) -> None:
         """Forget the overlay once its batch is committed."""
@@ -69,10 +71,13 @@ class SpaceState:
         """Return whether a write can be decided on its texts alone (`req.plain`).
 
         It can when no functional property is in it (no timestamp to weigh, no
-        old value to replace) and no changeset of the batch was decided term by
-        term in this space before it (its overlay is in terms).
+        old value to replace), no lease is in play (it has no lifespan, and no
+        triple of this space is leased), and no changeset of the batch was
+        decided term by term in this space before it (its overlay is in terms).
         """
-        if req.plain is None or self._overlay:
+        if req.plain is None or self._overlay or req.lifespan:
+            return False
+        if self.leases is not None and self.leases.holds(self.name):
             return False
         predicates = {row[1] for row in req.plain}
         if _TYPE_TEXT in predicates and any(
@@ -99,6 +104,8 @@ class SpaceState:
         kept, replaced, dropped = self._functional_additions(req.added, stamp)
         removed, added = self._net("t", req.removed + replaced, kept)
         i_removed, i_added = self._net("i", req.inferred_removed, req.inferred_added)
+        if self.leases is not None:
+            self.leases.decide(self.name, req.id, req.lifespan, kept, removed)
         new_prefixes = self.prefixes.update(req.prefixes)
         if not (removed or added or i_removed or i_added or new_prefixes):
             return None, dropped
@@ -125,6 +132,8 @@ class SpaceState:
         if req.cause:
             wire["cause"] = req.cause
         wire["seq"] = entry.seq
+        if req.lifespan:
+            wire["lifespan"] = req.lifespan
         if entry.prefixes:
             wire["prefixes"] = entry.prefixes
         for name, listed in zip(LISTS, texts, strict=True):

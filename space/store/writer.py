@@ -24,6 +24,7 @@ from space.store import intake
 from space.store.acks import AckGate
 from space.store.db import CommitFailed, StoreDB
 from space.store.guard import Refused, WriteGuard
+from space.store.lifespans import Leases, retractions
 from space.store.publish import Publisher
 from space.store.state import Net, SpaceState
 
@@ -78,6 +79,7 @@ class Writer:
         publisher: Publisher,
         max_spaces: int,
         guard: WriteGuard | None = None,
+        leases: Leases | None = None,
     ) -> None:
         self.session = session
         self.guard = guard
@@ -89,6 +91,7 @@ class Writer:
         self._acks = acks
         self._publisher = publisher
         self._next_probe = 0.0
+        self._leases = leases
 
     def _writable(self, name: str) -> SpaceState:
         """Return the state of a space about to be written, creating it within the limit."""
@@ -199,7 +202,10 @@ class Writer:
             return
         decided = [p for p in pending if p.net is not None]
         try:
-            self.db.commit([p.net.entry for p in decided])  # type: ignore[union-attr]
+            entries = [p.net.entry for p in decided]  # type: ignore[union-attr]
+            self.db.commit(
+                entries, self._leases.take_changes() if self._leases is not None else ([], [])
+            )
         except CommitFailed as exc:
             self._fail(exc, pending)
             return
@@ -225,8 +231,18 @@ class Writer:
             self._spaces.pop(name, None)
         for name in {p.state.name for p in pending}:
             self._space(name)  # as the database has it, not as the failed batch would have
+        if self._leases is not None:
+            self._leases.load(self.db)
         for p in pending:
             reject(p.req, CommitFailed(f"not applied: {exc}"))
+
+    def expire(self, pending: list[Pending]) -> None:
+        """Decide the retraction of each write whose lifespan ran out (`lifespans.py`)."""
+        if self.failed or self._leases is None:
+            return
+        stamp = lambda: str(self.session.new_timestamp())  # noqa: E731
+        for state, net in retractions(self._leases, self._space, stamp, time.time()):
+            pending.append(Pending(Request("expire", state.name, None), state, net, _no_reply))
 
     def probe(self, busy: int) -> None:
         """After a failed commit, try an empty one now and then; writes resume once one works.
@@ -243,6 +259,10 @@ class Writer:
             return
         log.warning("the database commits again: writes are accepted again")
         self.failed = ""
+
+
+def _no_reply(_net: Net | None) -> dict:
+    return {}
 
 
 def answer(req: Request, reply: dict) -> None:

@@ -1,0 +1,204 @@
+"""Leases: when each leased triple expires, kept on disk with it, and the sweep that retracts it.
+
+A write with a lifespan leases the asserted triples it asserts (those already
+held too: a sensor's periodic reading renews its lease). The latest write of a
+triple decides: with a lifespan it (re)leases it, without one it makes it
+permanent; a triple removed (by a write, a take, a functional replacement or
+its expiry) loses its lease.
+
+On disk a lease is the triple itself in the graph
+`urn:tspace:lease:<space>:<expiry in ms>:<write id, percent-encoded>`, committed in
+the same SPARQL update as the changeset that decided it: after `kill -9` the
+leases are exactly those of the triples held, and `load` finds them again
+(those whose time passed during the outage are due at once).
+
+In memory, one group per leasing write (its triples still leased by it) in a
+heap by expiry time; `due` hands the writer thread the groups whose time has
+come, a bounded number of triples per turn, so a mass expiry is spread over
+turns and never holds the writes queued behind it. Each group becomes one
+changeset retracting its triples, attributed to the store, naming the write
+that expired (`cause`). Because the expiry is an ordinary changeset decided
+by the one writer, a replicated log would order it like any other write (see
+docs/lifespans.md).
+
+Writer thread only, except `remaining` (any reader thread).
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import logging
+import time
+import uuid
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+from urllib.parse import quote, unquote
+
+import pyoxigraph as ox
+
+from space.store.db import StoreDB
+from space.store.intake import WriteRequest
+from space.store.oxterms import OxTriple
+
+if TYPE_CHECKING:
+    from space.store.state import Net, SpaceState
+
+log = logging.getLogger("tspace.store")
+
+LEASE = "urn:tspace:lease:"
+EXPIRY_AGENT = "tspace-store"  # the agent of the changesets retracting expired writes
+BUDGET = 64  # triples retracted per writer turn at most (a bigger write expires whole)
+
+_Group = tuple[str, float, str]  # space, expiry (unix seconds), write id
+
+
+def lease_graph(group: _Group) -> ox.NamedNode:
+    """Return the graph holding the triples a write leased until its expiry."""
+    space, expires, request = group
+    return ox.NamedNode(f"{LEASE}{space}:{round(expires * 1000)}:{quote(request, safe='')}")
+
+
+def parse_graph(name: str) -> _Group | None:
+    """Return `(space, expires, write id)` of a lease graph's IRI (None if it is not one)."""
+    if not name.startswith(LEASE):
+        return None
+    space, ms, request = name[len(LEASE) :].rsplit(":", 2)
+    return space, int(ms) / 1000, unquote(request)
+
+
+class Leases:
+    """Every lease of every space, and the lease quads the next commit must write."""
+
+    def __init__(self) -> None:
+        self._held: dict[tuple[str, OxTriple], _Group] = {}
+        self._groups: dict[_Group, set[OxTriple]] = {}
+        self._heap: list[tuple[float, int, _Group]] = []
+        self._order = itertools.count()
+        self._changes: dict[ox.Quad, bool] = {}  # lease quads to insert (True) or delete
+        self._per_space: dict[str, int] = {}  # leased triples
+
+    def __len__(self) -> int:
+        return len(self._held)
+
+    def holds(self, space: str) -> bool:
+        """Return whether any triple of a space is leased."""
+        return self._per_space.get(space, 0) > 0
+
+    def load(self, db: StoreDB) -> None:
+        """Forget everything and read the leases from the database (at start, after a failure)."""
+        self.__init__()  # type: ignore[misc]
+        for g in db.store.named_graphs():
+            if not isinstance(g, ox.NamedNode):
+                continue
+            group = parse_graph(g.value)
+            if group is None:
+                continue
+            for q in db.store.quads_for_pattern(None, None, None, g):
+                self._lease(group, (q.subject, q.predicate, q.object))
+        if self._held:
+            log.info("%d leased triple(s) in %d write(s)", len(self._held), len(self._groups))
+
+    def decide(
+        self,
+        space: str,
+        request: str,
+        lifespan: float | None,
+        asserted: list[OxTriple],
+        removed: list[OxTriple],
+    ) -> None:
+        """Note what a changeset does to leases: `removed` lose theirs, `asserted` get the write's.
+
+        `asserted` are the additions applied (held already or not), `removed`
+        the asserted triples it really removes.
+        """
+        for t in removed:
+            self._release(space, t)
+        group = (space, time.time() + lifespan, request) if lifespan else None
+        for t in asserted:
+            self._release(space, t)
+            if group is not None:
+                self._lease(group, t)
+                self._changes[_quad(group, t)] = True
+
+    def take_changes(self) -> tuple[list[ox.Quad], list[ox.Quad]]:
+        """Return the lease quads to delete and to insert with the next commit, and forget them."""
+        changes, self._changes = self._changes, {}
+        return [q for q, v in changes.items() if not v], [q for q, v in changes.items() if v]
+
+    def next_due(self) -> float | None:
+        """Return the earliest expiry time still to sweep (unix seconds), if any."""
+        while self._heap and self._heap[0][2] not in self._groups:
+            heapq.heappop(self._heap)
+        return self._heap[0][0] if self._heap else None
+
+    def due(self, now: float, budget: int = BUDGET) -> list[tuple[_Group, list[OxTriple]]]:
+        """Return the writes expired by `now` with their leased triples, about `budget` at most.
+
+        Their leases are released here: the changesets retracting them are
+        committed with the release of their lease quads.
+        """
+        found: list[tuple[_Group, list[OxTriple]]] = []
+        count = 0
+        while count < budget and self.next_due() is not None and self._heap[0][0] <= now:
+            group = heapq.heappop(self._heap)[2]
+            triples = list(self._groups.get(group, ()))
+            for t in triples:
+                self._release(group[0], t)
+            found.append((group, triples))
+            count += len(triples)
+        return found
+
+    def _lease(self, group: _Group, t: OxTriple) -> None:
+        if (group[0], t) not in self._held:
+            self._per_space[group[0]] = self._per_space.get(group[0], 0) + 1
+        self._held[(group[0], t)] = group
+        held = self._groups.get(group)
+        if held is None:
+            held = self._groups[group] = set()
+            heapq.heappush(self._heap, (group[1], next(self._order), group))
+        held.add(t)
+
+    def _release(self, space: str, t: OxTriple) -> None:
+        group = self._held.pop((space, t), None)
+        if group is None:
+            return
+        self._per_space[space] -= 1
+        held = self._groups[group]
+        held.discard(t)
+        if not held:
+            del self._groups[group]
+        self._changes[_quad(group, t)] = False
+
+
+def retractions(
+    leases: Leases, space: Callable[[str], SpaceState], stamp: Callable[[], str], now: float
+) -> list[tuple[SpaceState, Net | None]]:
+    """Decide one changeset per write expired by `now`, retracting what it still leased.
+
+    Each is attributed to the store (`EXPIRY_AGENT`) and names the expired
+    write as its `cause`. Writer thread only; the caller commits them.
+    """
+    decided = []
+    for (name, _expires, request), triples in leases.due(now):
+        state = space(name)
+        write = WriteRequest(
+            id=uuid.uuid4().hex, agent=EXPIRY_AGENT, cause=request, removed=triples
+        )
+        net, _ = state.decide(write, stamp())
+        decided.append((state, net))
+    return decided
+
+
+def _quad(group: _Group, t: OxTriple) -> ox.Quad:
+    return ox.Quad(t[0], t[1], t[2], lease_graph(group))
+
+
+def remaining(db: StoreDB, space: str, t: OxTriple, now: float) -> float | None:
+    """Return the seconds a triple of a space has left to live (None: permanent)."""
+    for q in db.store.quads_for_pattern(t[0], t[1], t[2], None):
+        g = q.graph_name
+        group = parse_graph(g.value) if isinstance(g, ox.NamedNode) else None
+        if group is not None and group[0] == space:
+            return max(0.0, group[1] - now)
+    return None
