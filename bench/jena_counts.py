@@ -120,8 +120,10 @@ def main(root: Path) -> None:
         if "steps" in spec:
             jena = [ntriples(p) for p in re.split(r"^# state \d+\n", answer, flags=re.M)[1:]]
             got = states(case.with_suffix(".rules"), spec["steps"])
-            passed += got is not None and len(got) == len(jena) and all(
-                isomorphic(a, b) for a, b in zip(got, jena, strict=True)
+            passed += (
+                got is not None
+                and len(got) == len(jena)
+                and all(isomorphic(a, b) for a, b in zip(got, jena, strict=True))
             )
             continue
         ours = closure(case.with_suffix(".rules"), [case.with_suffix(".data.nt")])

@@ -145,10 +145,15 @@ def measure(endpoint: str, pid: int, code: Path | None, run: int, args) -> dict[
         rows["100 acked writes beside it, p50 (ms)"] = w50
         rows["100 acked writes beside it, p99 (ms)"] = w99
         rows["100 acked writes beside it, max (ms)"] = wmax
-        rows[f"tspace write of {args.bulk:,} triples (triples/s)"] = store.bulk_write(
-            endpoint, code, args.bulk
+        name = f"tspace write of {args.bulk:,} triples (triples/s)"
+        if code is not None and args.bulk > 100_000:
+            # the old `tspace write` sends one changeset, which its store refuses above 100,000
+            rows[name] = float("nan")
+        else:
+            rows[name] = store.bulk_write(endpoint, code, args.bulk)
+        rows[f"store RSS holding ~{(100_000 + args.bulk) // 1000:,}k triples (MB)"] = store.rss_mb(
+            pid
         )
-        rows["store RSS after all of the above (MB)"] = store.rss_mb(pid)
     return rows
 
 
@@ -163,7 +168,8 @@ def main() -> None:
         "--store",
         action="store_true",
         help="also SPARQL on 100k, writes beside a slow query, "
-        "a bulk tspace write and the store's RSS",
+        "a bulk tspace write and the store's RSS after it (the old tree's bulk write "
+        "is skipped above 100,000 triples: its one changeset would be refused)",
     )
     parser.add_argument("--bulk", type=int, default=100_000, help="triples of the bulk write")
     parser.add_argument("--plot", type=Path, help="write a PNG of new vs old here")
