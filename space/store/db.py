@@ -36,6 +36,7 @@ import pyoxigraph as ox
 
 from space.errors import SpaceError
 from space.store import oxterms
+from space.store.flusher import Flusher
 from space.store.oxterms import OxTerm, OxTriple
 
 log = logging.getLogger("tspace.store")
@@ -148,9 +149,11 @@ class StoreDB:
             self.store = ox.Store.read_only(str(self.path))
             self.open_error = f"the database opened read-only: {exc}"
         self._commits: dict[str, int] = {}  # per space, since its last compaction
+        self._flusher = Flusher(lambda: self.store if hasattr(self, "store") else None)
 
     def close(self) -> None:
         """Flush and let go of the database (the last reference closes it)."""
+        self._flusher.close()
         try:
             self.store.flush()
         except OSError as exc:
@@ -235,6 +238,8 @@ class StoreDB:
                 self.store.flush()
         except (OSError, RuntimeError) as exc:
             raise CommitFailed(f"the database could not commit: {exc}") from exc
+        if not self.durable:
+            self._flusher.wrote(sum(map(_size, entries)) + len(extra[1]))
         for e in entries:
             self._commits[e.space] = self._commits.get(e.space, 0) + 1
         for space, seq in {e.space: e.seq for e in entries}.items():
@@ -254,6 +259,10 @@ class StoreDB:
         Raises:
             CommitFailed: it does not commit yet.
         """
+        with self._flusher.paused():
+            self._reopen()
+
+    def _reopen(self) -> None:
         from space.store.migrate import open_store
 
         self.store = None  # type: ignore[assignment]
@@ -363,6 +372,17 @@ class StoreDB:
             self.store.flush()
         except (OSError, RuntimeError) as exc:
             raise CommitFailed(f"the database could not commit: {exc}") from exc
+
+
+def _size(e: Entry) -> int:
+    """Return the number of quads an entry writes, roughly (its triples)."""
+    return (
+        len(e.plain)
+        + len(e.added)
+        + len(e.removed)
+        + len(e.inferred_added)
+        + len(e.inferred_removed)
+    )
 
 
 def log_quads(
