@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from rdflib.term import Node
 
 from space import Triple
-from space.reasoning import Delta, Origin, RuleEngine
+from space.reasoning import Delta, Engine, Origin
 
 OWED_FOR = 60.0  # seconds: an owner alive this long after a change answers it itself or resyncs
 
@@ -77,7 +77,7 @@ class Ledger:
         return taken
 
 
-def present_truth(engine: RuleEngine, deltas: Iterable[Delta]) -> Delta:
+def present_truth(engine: Engine, deltas: Iterable[Delta]) -> Delta:
     """Return what the engine holds now of the triples these deltas changed, as one delta."""
     asserted = set(engine.triples(Origin.ASSERTED))
     inferred = set(engine.triples(Origin.INFERRED))

@@ -21,10 +21,11 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import ClassVar
 
 import zenoh
+from rdflib import URIRef
 from rdflib.term import Node
 
 from agents.view import View
-from agents.vocabulary import RECORD_PREFIX, local_name, robot_iri
+from agents.vocabulary import local_name, robot_iri
 from agents.writes import Writes
 from space import (
     Change,
@@ -68,8 +69,10 @@ class Agent:
         per_robot: False for agents serving the whole space (named just `kind`).
         keeps_view: False for agents that never read `view` (it is then left empty:
             applying a 600-triple change to it costs milliseconds).
-        reads_records: True for agents that read the reasoner's firing records from
-            changes (the HMI); the others' subscriptions leave them out unparsed.
+        shared: for a per-robot agent, the predicates it follows on any subject besides
+            its robot's own subjects (`ac:robot7`, `ac:robot7_*`): it then receives only
+            those parts of the space's changes, the router filtering out the rest of a
+            fleet's traffic (`TripleSpace.subscribe(scope=...)`). None: every change.
         args: the parsed command line.
         robot: the robot this agent serves.
         name: the agent's name in logs, liveliness and changesets.
@@ -80,7 +83,7 @@ class Agent:
     kind: ClassVar[str] = "agent"
     per_robot: ClassVar[bool] = True
     keeps_view: ClassVar[bool] = True
-    reads_records: ClassVar[bool] = False
+    shared: ClassVar[tuple[URIRef, ...] | None] = None
 
     def __init__(self, args: argparse.Namespace) -> None:
         self.args = args
@@ -138,19 +141,28 @@ class Agent:
                 self._stop.wait(0.5)
         self.log.info("connected to space %r as %s", self.ts.space, self.name)
 
+    def scope(self) -> list[tuple[object, object]] | None:
+        """Return the (subject, predicate) pairs this agent follows; None for the whole space."""
+        if self.shared is None or not self.per_robot:
+            return None
+        return robot_scope(self.robot, self.shared)
+
     def subscribe(self) -> Subscription:
         """Subscribe to the space; the first change delivered is the snapshot.
 
+        A scoped agent's snapshot is the whole space but other robots' parts
+        (`View.concerning`): what it knows once of the site, its robot's state.
         Blocking; called by `setup()`. The reasoner overrides it to load the
         asserted graph on its own.
         """
         assert self.ts is not None
+        scope = self.scope()
         return self.ts.subscribe(
             None,
             self._inbox.put,
-            snapshot=True,
+            snapshot="all" if scope is not None else True,
             timeout=self.args.timeout,
-            skip_subjects=None if self.reads_records else RECORD_PREFIX,
+            scope=scope,
         )
 
     def run(self) -> None:
@@ -217,6 +229,8 @@ class Agent:
                 self._early.append(change)
             return
         if self.keeps_view:
+            if not self.started and self.shared is not None:
+                change.added = View.concerning(change.added, self.robot)
             self.view.apply(change, snapshot=not self.started)
         if not self.started:
             self.started = True
@@ -288,6 +302,9 @@ class Agent:
     def _surface_failed_writes(self) -> None:
         """Undo in the view, and log, each write the store did not take (the loop's thread)."""
         for failed in self.writes.failed():
+            if not failed.added and not failed.removed:  # a renewal (`_renew`): nothing to undo
+                self.log.warning("renewal %s not taken: %s", failed.id, failed.error)
+                continue
             self.log.warning("write %s not taken, undone in the view: %s", failed.id, failed.error)
             if all(t in self.view.graph for t in failed.added):
                 self.view.remove(failed.added)
@@ -318,6 +335,15 @@ class Agent:
 
     def tick(self) -> None:
         """Advance simulations and controllers; called every `--tick` seconds. Never blocks long."""
+
+
+def robot_scope(robot: URIRef, shared: Sequence[URIRef] = ()) -> list[tuple[object, object]]:
+    """Return the scope of a robot's agent: its robot, the robot's parts, `shared` predicates.
+
+    A robot's parts are named after it (`ac:robot7_battery`, as `agents.sim.fleet`
+    names the clones), which is what lets the router select them by key.
+    """
+    return [(robot, None), (f"{robot}_*", None), *((None, p) for p in shared)]
 
 
 def build_parser(cls: type[Agent], prog: str | None = None) -> argparse.ArgumentParser:

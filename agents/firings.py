@@ -25,9 +25,23 @@ FIRING_PREFIX = RECORD_PREFIX  # the subjects of firing records
 RULE_NAME = AC.rule_name
 
 
-def is_record(triple: Triple) -> bool:
-    """Return True for a triple of a firing record (the rules never need to see those)."""
-    return str(triple[0]).startswith(FIRING_PREFIX)
+RECORD_TYPES = frozenset({AC.RuleFiring, AC.RuleLoop})
+
+
+def record_subjects(triples: Iterable[Triple]) -> set[Node]:
+    """Return the firing records among the subjects of `triples`: those typed as one.
+
+    A record is written and dropped whole, its type with it, so the triples of one
+    changeset (or a whole state) name their records themselves.
+    """
+    return {s for s, p, o in triples if p == RDF.type and o in RECORD_TYPES}
+
+
+def without_records(triples: Iterable[Triple]) -> list[Triple]:
+    """Return the triples but those of firing records (the rules never need to see those)."""
+    triples = list(triples)
+    records = record_subjects(triples)
+    return [t for t in triples if t[0] not in records] if records else triples
 
 
 class FiringLog:

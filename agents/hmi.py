@@ -27,6 +27,7 @@ from rdflib import OWL, RDF, RDFS, Literal, URIRef
 from rdflib.term import Node
 
 from agents.base import Agent, run_agent
+from agents.hmi_freshness import Freshness
 from agents.hmi_history import LOOKBACK, History
 from agents.hmi_web.guard import Guard
 from agents.hmi_web.server import CommandError, Commands, HmiServer, StateBoard
@@ -53,7 +54,6 @@ class Hmi(Agent):
     """Serve the HMI web page for every robot of the space."""
 
     kind = "hmi"
-    reads_records = True  # its "last rule firings" come from the changes
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)
@@ -62,6 +62,7 @@ class Hmi(Agent):
         self.records: deque[ChangeRecord] = deque(maxlen=200)
         self.bad_values = BadValues(self.log.warning)
         self.history = History()
+        self.freshness = Freshness()
         self._new_events: list[dict] = []
         self.server: HmiServer | None = None
         self._http: threading.Thread | None = None
@@ -120,12 +121,16 @@ class Hmi(Agent):
     def on_change(self, change: Change) -> None:
         """Remember the change (its events, and to explain later firings); show the new state."""
         self.records.append(ChangeRecord.of(change))
+        self.freshness.note(change)
         self._new_events += self.history.events([change], self.view.graph)
         self._publish()
 
     def tick(self) -> None:
-        """Run the commands the page sent since the last tick."""
+        """Run the commands the page sent since the last tick; tell the page of renewals."""
         self.commands.run_pending(self._command)
+        assert self.ts is not None
+        if self.freshness.poll(self.ts, self.args.timeout):
+            self._publish()
 
     def _publish(self) -> None:
         graph = self.view.graph
@@ -136,11 +141,14 @@ class Hmi(Agent):
             state = asdict(robot)
             for device in state["devices"]:
                 device["reported"] = self.view.text(AC[device["name"]], AC.actual_mode)
+                device["reported_fresh"] = self.freshness.of(AC[device["name"]], AC.actual_mode)
+            battery = self.view.device(iri, AC.Battery)
             state.update(
                 site=local_name(site) if isinstance(site, URIRef) else None,
                 presence=self.view.text(iri, AC.presence),
                 people=self._named(site, AC.Person, AC.Patient),
                 places=self._named(site, AC.Room, AC.Corridor, AC.Dock),
+                battery_fresh=self.freshness.of(battery, AC.battery_level),
             )
             robots.append(state)
         events, self._new_events = self._new_events, []

@@ -28,6 +28,8 @@ class HwMonitor(Agent):
     """Simulate and monitor a robot's devices: levels, faults and running modes."""
 
     kind = "hw_monitor"
+    # Besides its robot: the places' crowds its lasers see, the levels and the task types.
+    shared = (AC.crowd_level, AC.level, AC.below_percent, AC.type)
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)

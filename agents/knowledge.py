@@ -9,7 +9,7 @@ import warnings
 from pathlib import Path
 
 from agents.resources import data_file
-from space.reasoning import RuleEngine, UnsupportedAxiom
+from space.reasoning import Engine, UnsupportedAxiom, engine_from_files
 
 log = logging.getLogger("tspace.reasoner")
 RELOAD_PERIOD = 1.0  # seconds between looks at the rules files
@@ -29,8 +29,11 @@ class Knowledge:
         self._mtimes: dict[Path, float] = {}
         self._checked = 0.0
 
-    def build(self) -> RuleEngine:
+    def build(self) -> Engine:
         """Return an engine for the files as they are now, remembering their mtimes.
+
+        Every rule form runs: forward rules in one engine, backward rules and rules
+        nested in heads in a second layer over it, as Jena's hybrid mode (`build_engine`).
 
         Raises:
             RuleError: a rules file is invalid (the message has its line and column).
@@ -38,7 +41,7 @@ class Knowledge:
         self._mtimes = self._stat()
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", UnsupportedAxiom)
-            engine = RuleEngine.from_files(rules=self.rules, ontology=self.ontology)
+            engine = engine_from_files(rules=self.rules, ontology=self.ontology)
         for w in caught:
             if issubclass(w.category, UnsupportedAxiom):
                 log.warning("ontology: %s", w.message)

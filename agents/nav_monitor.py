@@ -35,6 +35,8 @@ class NavMonitor(Agent):
     """Drive a simulated base to semantic places and report where the robot is."""
 
     kind = "nav_monitor"
+    # Besides its robot: where the places are, and the speed levels.
+    shared = (AC.map_x, AC.map_y, AC.level, AC.meters_per_second)
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)

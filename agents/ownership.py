@@ -33,7 +33,7 @@ from rdflib.term import Node
 
 from agents.vocabulary import AC, local_name
 from space import KEY_ROOT, Triple, escape_key_chunk, unescape_key_chunk
-from space.reasoning import RuleEngine
+from space.reasoning import Engine
 
 PREFIX = "reasoner."
 
@@ -43,7 +43,7 @@ def reasoner_name(robot: Node) -> str:
     return PREFIX + local_name(robot)  # type: ignore[arg-type]
 
 
-def owner(engine: RuleEngine, subject: Node) -> Node | None:
+def owner(engine: Engine, subject: Node) -> Node | None:
     """Return the robot `subject` is or belongs to (as a device or skill), or None."""
     if (subject, RDF.type, AC.Robot) in engine:
         return subject
@@ -53,7 +53,7 @@ def owner(engine: RuleEngine, subject: Node) -> Node | None:
     return None
 
 
-def concerned_robot(engine: RuleEngine, triples: Iterable[Triple]) -> Node | None:
+def concerned_robot(engine: Engine, triples: Iterable[Triple]) -> Node | None:
     """Return the one robot whose things a change touches; None if it touches none or several."""
     robots = {owner(engine, s) for s, _p, _o in triples} - {None}
     return robots.pop() if len(robots) == 1 else None

@@ -1,6 +1,7 @@
 """The reasoner: the space's rules engine, answering each changeset with its conclusions.
 
-It holds the ontology and the rules (`space.reasoning.RuleEngine`), applies
+It holds the ontology and the rules (`space.reasoning.build_engine`: every Jena rule
+form, backward and nested rules in a second layer as Jena's hybrid mode), applies
 every changeset other agents write, and writes back one changeset naming its
 cause: what production rules changed (asserted) and what is entailed
 (inferred graph), plus a record of each rule firing (`agents.firings`). Its
@@ -31,7 +32,7 @@ from rdflib.term import Node
 from agents.answers import Ledger, present_truth
 from agents.base import Agent, run_agent
 from agents.conflicts import ConflictRecords
-from agents.firings import FIRING_PREFIX, FiringLog, is_record
+from agents.firings import FIRING_PREFIX, FiringLog, without_records
 from agents.knowledge import Knowledge
 from agents.ownership import PREFIX, Roster, concerned_robot
 from agents.vocabulary import AC, local_name
@@ -52,10 +53,10 @@ from space import (
 )
 from space.reasoning import (
     Delta,
+    Engine,
     Explainer,
     Firing,
     Origin,
-    RuleEngine,
     RuleError,
     RuleLoopError,
     read_graph,
@@ -80,7 +81,7 @@ class Reasoner(Agent):
             self.name = args.name or f"{self.kind}.{local_name(self.robot)}"
             self.log = logging.getLogger(self.name)
             prefix += f"{local_name(self.robot)}_"
-        self.engine: RuleEngine | None = None
+        self.engine: Engine | None = None
         self.firings = FiringLog(args.keep_firings, prefix)
         self.conflicts = ConflictRecords()
         self.roster = Roster(self.name) if args.per_robot else None
@@ -144,13 +145,9 @@ class Reasoner(Agent):
             # Declared first: the reasoners present now are known once the engine is built.
             self._others = self.roster.watch(self.ts.session, self.ts.space)
         engine = self.knowledge.build()
-        # Its own answers and every firing record are left out before parsing: it ignores them.
+        # Its own answers are left out before parsing: it ignores them.
         subscription = self.ts.subscribe(
-            None,
-            self._inbox.put,
-            timeout=self.args.timeout,
-            skip_own=True,
-            skip_subjects=FIRING_PREFIX,
+            None, self._inbox.put, timeout=self.args.timeout, skip_own=True
         )
         try:
             self._seed()
@@ -171,7 +168,7 @@ class Reasoner(Agent):
 
     def _load(
         self,
-        engine: RuleEngine,
+        engine: Engine,
         asserted: list[Triple],
         inferred: list[Triple],
         seq: int,
@@ -183,7 +180,7 @@ class Reasoner(Agent):
         With `write`, what loading concluded beyond the space is written into it.
         """
         # In a canonical order: engines that load the same state fire the same way.
-        state = sorted((t for t in asserted if not is_record(t)), key=triple_to_nt)
+        state = sorted(without_records(asserted), key=triple_to_nt)
         delta, loop = _applying(lambda: engine.load(state))
         self.engine, self._loaded_seq = engine, seq
         self._explainer = None
@@ -234,14 +231,14 @@ class Reasoner(Agent):
     # Changes
 
     def on_change(self, change: Change) -> None:
-        """Apply another agent's changeset (firing records left out) and answer it."""
+        """Apply another agent's changeset (another reasoner's records left out), answer it."""
         if self.engine is None or change.seq <= self._loaded_seq:
             return  # in the state loaded
         self.writers.note(change)
         from_reasoner = self.roster is not None and change.agent.startswith(PREFIX)
         if from_reasoner:
             self._ledger.answered(change.cause)
-        added, removed = list(change.added), list(change.removed)
+        added, removed = without_records(change.added), without_records(change.removed)
         removed += self._replaced(added, removed)
         if not added and not removed:
             return
@@ -413,7 +410,7 @@ class Reasoner(Agent):
         """Explain at most `limit` matching triples the engine holds, in N-Triples order."""
         assert self.engine is not None
         matches = sorted(
-            (t for t in self.engine.match(*template.pattern()) if not is_record(t)),
+            self.engine.match(*template.pattern()),  # records never enter the engine
             key=triple_to_nt,
         )
         if self._explainer is None:

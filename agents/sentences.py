@@ -15,7 +15,8 @@ from collections.abc import Iterable, Sequence
 from rdflib import RDF, BNode, Graph, Literal, URIRef
 from rdflib.term import Node
 
-from agents.vocabulary import AC, RECORD_PREFIX
+from agents.firings import without_records
+from agents.vocabulary import AC
 from space import Triple
 
 TASKS = {
@@ -56,11 +57,11 @@ def _robot_of(graph: Graph, subject: Node) -> str | None:
 
 def _kept(triples: Iterable[Triple]) -> list[Triple]:
     """Leave out what a reader does not care about: records, types, blank nodes."""
+    triples = without_records(triples)
     return [
         t
         for t in triples
-        if not str(t[0]).startswith(RECORD_PREFIX)
-        and t[1] != RDF.type
+        if t[1] != RDF.type
         and str(t[1]).startswith(str(AC))
         and not any(isinstance(x, BNode) for x in t)
     ]

@@ -2,9 +2,7 @@
 
 The copy itself (functional replacement, asserted and inferred kept apart) is
 `space.SpaceMirror`; this adds the readings agents share (a robot's devices,
-tasks by type, the integrator's levels) and leaves out the reasoner's firing
-records: no agent decides from them (the HMI reads them from the changes), and
-a change that fires many rules would cost every agent their triples.
+tasks by type, the integrator's levels).
 """
 
 from __future__ import annotations
@@ -14,15 +12,26 @@ from collections.abc import Iterable
 from rdflib import RDF, Literal, URIRef
 from rdflib.term import Node
 
-from agents.vocabulary import AC, RECORD_PREFIX
+from agents.firings import without_records
+from agents.vocabulary import AC
 from space import SpaceMirror, Triple
 
 
 class View(SpaceMirror):
     """The triples an agent knows, with the lookups agents need (owner thread only)."""
 
-    def __init__(self, triples: Iterable[Triple] = ()) -> None:
-        super().__init__(triples, skip_subjects=RECORD_PREFIX)
+    @staticmethod
+    def concerning(triples: Iterable[Triple], robot: URIRef) -> list[Triple]:
+        """Return the triples but other robots' and their parts' (`ac:robot2_battery`), and records.
+
+        What a robot's agent keeps of a snapshot: it follows only its own robot's
+        changes, so another robot's state, or the reasoner's firing records, would
+        go stale in its view.
+        """
+        triples = without_records(triples)
+        others = {s for s, p, o in triples if p == RDF.type and o == AC.Robot and s != robot}
+        stems = tuple(f"{r}_" for r in others)
+        return [t for t in triples if t[0] not in others and not str(t[0]).startswith(stems)]
 
     def devices(self, robot: URIRef, cls: Node) -> list[URIRef]:
         """Return the robot's devices of class `cls`."""

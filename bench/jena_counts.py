@@ -48,6 +48,12 @@ def main(root: Path) -> None:
 
     def engine(rules: Path) -> Any:
         loaded = load_rules([rules], registry, **quiet)
+        try:  # the engine users get (every rule form), where this checkout has it
+            from space.reasoning import build_engine
+        except ImportError:
+            pass
+        else:
+            return build_engine(loaded, owl=False)
         try:  # two layers for a hybrid rule set, where this checkout has them
             from space.reasoning.hybrid import HybridEngine, mixes_forms
         except ImportError:

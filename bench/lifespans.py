@@ -11,20 +11,22 @@ One store (`tspace serve` on a fresh data dir) per run. Measures, in one run:
    200 probe expiries: when the retraction reached a subscriber minus (the probe's
    send time + its lifespan) -- an upper bound, it includes the write's and the
    notification's own latency;
-3. acked write latency, 1 triple at a time, while 10,000 triples written with
-   the same lifespan by 10,000 changesets expire, beside the same writes with nothing
-   expiring;
+3. acked write latency, 1 triple at a time, while 10,000 triples fall due at one
+   instant, written 100 a changeset, then 1 a changeset (`--per`), beside the same
+   writes with nothing expiring; with `--old DIR`, the same on the store before
+   (after the same 100,000 leased triples);
+4. memory per leased triple: the store's RSS growth for 100,000 leased triples
+   minus that for 100,000 permanent ones, and the in-memory index alone (tracemalloc).
+
 Objects are IRIs, not numbers: the store's canonical form of a typed literal
 (`oxterms._canonical`) costs more with every distinct literal seen (10 ms each
 after 20,000; reported to the store's owner), which would swamp what is measured here.
-
-4. memory per leased triple: the store's RSS growth for 100,000 leased triples
-   minus that for 100,000 permanent ones, and the in-memory index alone (tracemalloc).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import threading
 import time
 import tracemalloc
@@ -99,11 +101,13 @@ def lateness(ts: TripleSpace, probes: int) -> list[float]:
     return late
 
 
-def writes_during_mass_expiry(ts: TripleSpace, mass: int) -> tuple[list[float], list[float], float]:
+def writes_during_mass_expiry(
+    ts: TripleSpace, mass: int, per: int
+) -> tuple[list[float], list[float], float]:
     """Return write latencies (ms) with nothing expiring, then during a mass expiry; its span (s).
 
-    The mass is 100 changesets of `mass / 100` triples, written within a fraction of a
-    second with one lifespan, so they fall due together.
+    The mass is `mass / per` changesets of `per` triples, written with lifespans
+    that make them all fall due at one instant, some seconds after the last is sent.
     """
     quiet = [one_write(ts) for _ in range(300)]
     tag = uuid.uuid4().hex[:8]
@@ -116,18 +120,26 @@ def writes_during_mass_expiry(ts: TripleSpace, mass: int) -> tuple[list[float], 
 
     sub = ts.subscribe((None, mark, None), on_change)
     try:
-        life, per = 4.0, mass // 100
+        # How fast this store takes such changesets now, to make them all due after the last.
         started = time.time()
+        bulk(ts, 20 * per, per, None)
+        pace = (time.time() - started) / 20
+        due_at = time.time() + 3.0 + 3 * pace * (mass / per)
         pending = []
         for start in range(0, mass, per):
             rows = [
                 (URIRef(f"{EX}{tag}/{i}"), mark, URIRef(f"{EX}o{i}"))
                 for i in range(start, start + per)
             ]
+            life = due_at - time.time()
+            if life < 1.0:
+                raise SystemExit("writing the mass took too long for its lifespans: no figure")
             pending.append(ts.send_later(ts.changeset(rows, lifespan=life), timeout=60))
+            if len(pending) >= 64:
+                pending.pop(0).result()
         for p in pending:
             p.result()
-        while time.time() < started + life - 0.5:
+        while time.time() < due_at - 0.5:
             time.sleep(0.01)
         busy: list[float] = []
         deadline = time.time() + 30
@@ -163,34 +175,65 @@ def index_bytes(count: int) -> float:
     return (after - before) / count
 
 
+def mass_table(
+    mass: int, per: int, runs: dict[str, list[tuple[list[float], list[float], float]]]
+) -> str:
+    """Print the writes beside a mass expiry: each run's p50/p99/max, and the medians."""
+    rows = []
+    for label, measured in runs.items():
+        for when, index in (("nothing expiring", 0), ("during the expiry", 1)):
+            p50 = [median(r[index]) for r in measured]
+            p99 = [percentile(r[index], 99) for r in measured]
+            top = [max(r[index]) for r in measured]
+            rows.append(
+                (
+                    f"{label}, {when}",
+                    " / ".join(f"{x:.1f}" for x in p99),
+                    median(p50),
+                    median(p99),
+                    median(top),
+                    median([r[2] for r in measured]) if index else "",
+                )
+            )
+    return print_table(
+        f"acked 1-triple write latency, ms, beside a mass expiry of {mass} triples written "
+        f"{per} a changeset ({len(next(iter(runs.values())))} runs, interleaved)",
+        ["store, when", "p99 of each run", "p50", "p99", "max", "swept in, s"],
+        rows,
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--writes", type=int, default=500)
     parser.add_argument("--live", type=int, default=100_000)
     parser.add_argument("--mass", type=int, default=10_000)
+    parser.add_argument(
+        "--per",
+        type=int,
+        nargs="+",
+        default=[100, 1],
+        help="triples per changeset of the mass expiry, one run each (default 100 1)",
+    )
+    parser.add_argument("--mass-runs", type=int, default=3, help="runs of each mass expiry")
     parser.add_argument("--old", type=Path, help="a source tree of the code before")
     args = parser.parse_args()
     rates: dict[str, list[float]] = {"permanent": [], "lifespan": [], "permanent (before)": []}
-    with serve_process() as (endpoint, pid), TripleSpace.open(endpoint, space="bench") as ts:
-        old = serve_process(args.old) if args.old else None
+    with contextlib.ExitStack() as stack:
+        endpoint, pid = stack.enter_context(serve_process())
+        ts = stack.enter_context(TripleSpace.open(endpoint, space="bench"))
         old_ts = None
-        if old is not None:
-            old_endpoint, _ = old.__enter__()
-            old_ts = TripleSpace.open(old_endpoint, space="bench")
-        try:
-            for r in range(args.rounds):
-                order = ["permanent", "lifespan"] if r % 2 == 0 else ["lifespan", "permanent"]
-                for mode in order:
-                    life = 3600.0 if mode == "lifespan" else None
-                    rates[mode].append(acked_rate(ts, args.writes, life))
-                if old_ts is not None:
-                    rates["permanent (before)"].append(acked_rate(old_ts, args.writes, None))
-        finally:
+        if args.old:
+            old_endpoint, _ = stack.enter_context(serve_process(args.old))
+            old_ts = stack.enter_context(TripleSpace.open(old_endpoint, space="bench"))
+        for r in range(args.rounds):
+            order = ["permanent", "lifespan"] if r % 2 == 0 else ["lifespan", "permanent"]
+            for mode in order:
+                life = 3600.0 if mode == "lifespan" else None
+                rates[mode].append(acked_rate(ts, args.writes, life))
             if old_ts is not None:
-                old_ts.close()
-            if old is not None:
-                old.__exit__(None, None, None)
+                rates["permanent (before)"].append(acked_rate(old_ts, args.writes, None))
         rows = [(m, median(v), min(v), max(v)) for m, v in rates.items() if v]
         text = [print_table("acked 1-triple writes/s", ["mode", "median", "min", "max"], rows)]
 
@@ -199,7 +242,7 @@ def main() -> None:
         rss1 = rss_kb(pid)
         bulk(ts, args.live, 1000, 3600.0)
         rss2 = rss_kb(pid)
-        per = ((rss2 - rss1) - (rss1 - rss0)) * 1024 / args.live
+        per_triple = ((rss2 - rss1) - (rss1 - rss0)) * 1024 / args.live
         late = lateness(ts, 200)
         text.append(
             print_table(
@@ -208,29 +251,22 @@ def main() -> None:
                 [(percentile(late, 50), percentile(late, 99), max(late))],
             )
         )
-        quiet, busy, span = writes_during_mass_expiry(ts, args.mass)
-        text.append(
-            print_table(
-                f"acked write latency, ms, beside a mass expiry of {args.mass} triples "
-                f"(swept in {span:.2f} s)",
-                ["when", "writes", "p50", "p99", "max"],
-                [
-                    (
-                        "nothing expiring",
-                        len(quiet),
-                        median(quiet),
-                        percentile(quiet, 99),
-                        max(quiet),
-                    ),
-                    ("during the expiry", len(busy), median(busy), percentile(busy, 99), max(busy)),
-                ],
-            )
-        )
+        if old_ts is not None:
+            bulk(old_ts, args.live, 1000, 3600.0)  # the same leases live on the store before
+        stores = [("this", ts)] + ([("before", old_ts)] if old_ts is not None else [])
+        for per in args.per:
+            runs: dict[str, list[tuple[list[float], list[float], float]]] = {}
+            for _ in range(args.mass_runs):  # interleaved, so the machine's load hits both
+                for label, space in stores:
+                    runs.setdefault(label, []).append(
+                        writes_during_mass_expiry(space, args.mass, per)
+                    )
+            text.append(mass_table(args.mass, per, runs))
         text.append(
             print_table(
                 "memory per leased triple, bytes",
                 ["store RSS (leased - permanent)", "in-memory index"],
-                [(per, index_bytes(args.live))],
+                [(per_triple, index_bytes(args.live))],
             )
         )
     OUT.mkdir(exist_ok=True)

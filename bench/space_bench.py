@@ -21,8 +21,7 @@ import _store_measures as store
 from _harness import median, percentile, print_table, serve_process
 from rdflib import Literal, Namespace, URIRef
 
-from space import TripleSpace
-from space.request import Pending
+from space import Pending, TripleSpace
 
 BENCH = Path(__file__).parent
 T = URIRef("urn:bench:t")

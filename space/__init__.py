@@ -5,9 +5,13 @@ This list is the library's API: an application (the robot's agents under
 """
 
 from space._display import triple_text
+from space._heap import freeze_startup, refreeze
 from space._paths import default_data_dir
 from space._ports import any_free_port
 from space._ports import probe as probe_port
+from space._request import Pending
+from space._session import check_can_listen
+from space._subscription import Change, Subscription
 from space._turtle import read_turtle
 from space.ack import Ack, Dropped
 from space.changeset import Changeset
@@ -28,18 +32,14 @@ from space.errors import (
 )
 from space.explanation import Explanation, Written
 from space.functional import Replacement, declares_functional, replace_functional
-from space.heap import freeze_startup, refreeze
 from space.identity import Identity, load_identity
 from space.keys import ROOT as KEY_ROOT
 from space.keys import escape as escape_key_chunk
 from space.keys import unescape as unescape_key_chunk
-from space.lifespan import check_lifespan
+from space.lifespan import EXPIRY_AGENT, check_lifespan
 from space.mirror import ChangeRecord, SpaceMirror
 from space.prefixes import PrefixMap
 from space.presence import alive_agents, declare_agent, watch_agents
-from space.request import Pending
-from space.session import check_can_listen
-from space.subscription import Change, Subscription
 from space.template import Template
 from space.terms import Triple, from_nt, triple_to_nt
 from space.why import WhyService
@@ -47,6 +47,7 @@ from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT, make_config
 
 __all__ = [
     "DEFAULT_ENDPOINT",
+    "EXPIRY_AGENT",
     "KEY_ROOT",
     "SECURE_ENDPOINT",
     "Ack",

@@ -58,6 +58,7 @@ def _reads(root: str) -> list[dict]:
             [
                 f"{root}/**",
                 f"{space}/@/changes",
+                f"{space}/@/changes/*/*",
                 f"{space}/@/seq",
             ],
         ),
@@ -80,6 +81,7 @@ def _reads(root: str) -> list[dict]:
                 f"{space}/@agents/**",
                 f"{space}/@reasoners/**",
                 f"{root}/@stores/**",
+                f"{root}/@leader/**",
             ],
         ),
         # What the router sends a client: samples, replies, liveliness, only for what it asked.

@@ -21,9 +21,14 @@ from rdflib import Graph, URIRef
 from rdflib.query import Result
 
 from space import keys
+from space._request import Pending, ask_store
+from space._scoped import Scope, ScopedSubscription, selectors
+from space._session import open_session
+from space._subscription import Callback, Change, Dispatcher, Subscription
 from space.ack import Ack
 from space.changeset import Changeset, pack, unpack
 from space.errors import (
+    InputError,
     MalformedPayload,
     NoReasoner,
     QueryError,
@@ -34,9 +39,6 @@ from space.errors import (
 from space.explanation import Explanation
 from space.lifespan import check_lifespan
 from space.prefixes import PrefixMap
-from space.request import Pending, ask_store
-from space.session import open_session
-from space.subscription import Callback, Change, Dispatcher, Subscription
 from space.template import Template
 from space.terms import CACHED, Triple, triple_from_nt
 
@@ -501,47 +503,60 @@ class TripleSpace:
         template: TemplateLike,
         callback: Callback,
         *,
-        snapshot: bool = False,
+        snapshot: bool | str = False,
         timeout: float = 5.0,
         skip_own: bool = False,
-        skip_subjects: str | None = None,
+        scope: list[Scope] | None = None,
     ) -> Subscription:
         """Call `callback(change)` for every later changeset with triples matching `template`.
 
         With `snapshot=True` the first call carries the current matching state.
         Callbacks run in this handle's dispatcher thread, one at a time, in store order.
-        `skip_own` leaves out the changesets this handle's agent wrote, and
-        `skip_subjects` (an IRI prefix) the triples whose subject starts with it,
-        both before their terms are parsed (a big change costs nothing to ignore).
+        `skip_own` leaves out the changesets this handle's agent wrote before
+        their terms are parsed (a big change costs nothing to ignore).
+
+        `scope`, (subject, predicate) pairs (each None, a term, or `"IRI-prefix*"`:
+        `[(AC.robot7, None), ("ac:robot7_*", None)]`), asks only for the triples
+        of those subjects and predicates: the router sends nothing else, so a
+        robot's agent does not even receive the rest of a fleet's traffic. The
+        callback is then called once per (subject, predicate) part of a changeset
+        (each with the changeset's id and seq), in store order per part; see
+        docs/wire-format.md. Its snapshot holds the scope's state, or, with
+        `snapshot="all"`, everything matching `template` (the knowledge a robot's
+        agent reads once, whose changes do not concern it).
 
         Raises:
             SpaceUnavailable: no store answered (the sequence number is needed to fill gaps).
+            InputError: a malformed scope.
         """
         t = self._template(template)
         if not self._watchdogs:
-            # Changes missed while a link was down are fetched from the store's log when this
-            # session reconnects, or when the store's heartbeat shows a later sequence number.
-            self._watchdogs = [
-                self.session.info.declare_transport_events_listener(self._on_transport),
-                self.session.declare_subscriber(self._key("seq"), self._on_heartbeat),
-            ]
-        sub = Subscription(
-            self._dispatcher,
-            t,
-            callback,
-            skip_agent=self.agent if skip_own else None,
-            skip_subjects=skip_subjects,
-        )
+            self._watch_store()
+        skip_agent = self.agent if skip_own else None
+        if scope is None:
+            sub = Subscription(self._dispatcher, t, callback, skip_agent=skip_agent)
+            sub_keys = [self._key("changes")]
+        else:
+            sub = ScopedSubscription(
+                self._dispatcher,
+                t,
+                callback,
+                space=self.space,
+                selectors=self._selectors(scope),
+                skip_agent=skip_agent,
+            )
+            sub_keys = sub.keys
         self._dispatcher.add(sub)
-        sub.attach(
-            self.session.declare_subscriber(self._key("changes"), self._dispatcher.feed(sub))
-        )
         self._subscriptions.add(sub)
         try:
+            for key in sub_keys:
+                sub.attach(self.session.declare_subscriber(key, self._dispatcher.feed(sub)))
             if snapshot:
                 reply = self._snapshot(t, timeout)
                 seq = int(reply.get("seq") or 0)
-                state = [x for x in dict.fromkeys(_triples(reply)) if not sub.skips(x)]
+                state = list(dict.fromkeys(_triples(reply)))
+                if isinstance(sub, ScopedSubscription) and snapshot != "all":
+                    state = [x for x in state if sub.selects(x)]
                 initial = Change(
                     agent="",
                     seq=seq,
@@ -553,10 +568,34 @@ class TripleSpace:
         except BaseException:
             self.unsubscribe(sub)
             raise
+        if isinstance(sub, ScopedSubscription):
+            sub.start(seq)
         self._dispatcher.mark_ready(sub, seq, initial)
         return sub
 
-    def _on_transport(self, event: zenoh.TransportEvent) -> None:
+    def _selectors(self, scope: list[Scope]) -> list[str]:
+        try:
+            return selectors(scope, self.prefixes)
+        except InputError:
+            self.load_prefixes()  # the prefix may be registered in the space
+            return selectors(scope, self.prefixes)
+
+    def _watch_store(self) -> None:
+        """Fetch changes missed while a link was down from the store's log.
+
+        On this session's reconnection, when the leading store's token comes back
+        (a cut between it and us), and when the store's heartbeat shows a later
+        sequence number, so a lost change shows up even when no later one follows.
+        """
+        self._watchdogs = [
+            self.session.info.declare_transport_events_listener(self._on_transport),
+            self.session.liveliness().declare_subscriber(
+                f"{keys.ROOT}/@leader/*", self._on_transport
+            ),
+            self.session.declare_subscriber(self._key("seq"), self._on_heartbeat),
+        ]
+
+    def _on_transport(self, event: zenoh.TransportEvent | zenoh.Sample) -> None:
         if event.kind == zenoh.SampleKind.PUT:
             self._dispatcher.catch_up()
 
@@ -580,7 +619,7 @@ class TripleSpace:
         )
         return int(reply.get("seq") or 0)
 
-    def _fetch_log(self, first: int, last: int) -> list[bytes]:
+    def _fetch_log(self, first: int, last: int) -> tuple[list[bytes], int]:
         reply = ask_store(
             self.session,
             self._key("log"),
@@ -588,7 +627,7 @@ class TripleSpace:
             5.0,
             what="log request",
         )
-        return [bytes(p) for p in reply.get("changes") or ()]
+        return [bytes(p) for p in reply.get("changes") or ()], int(reply.get("seq") or 0)
 
 
 def _triples(reply: dict) -> Iterator[Triple]:

@@ -27,7 +27,6 @@ GRAPHS = (ASSERTED, INFERRED)
 
 _SPACE_RE = re.compile(r"^[A-Za-z0-9_.\-]+$")
 _FORBIDDEN = {"%": "%25", "/": "%2F", "*": "%2A", "$": "%24", "?": "%3F", "#": "%23"}
-_FORBIDDEN_RE = re.compile(r"[%/*$?#]")
 _ESCAPED_RE = re.compile(r"%(25|2F|2A|24|3F|23)", re.I)
 _TYPED_PNAME_RE = re.compile(r'^(".*")\^\^([^<>"]+)$', re.S)
 
@@ -48,9 +47,21 @@ def service_key(space: str, service: str, root: str = ROOT) -> str:
     return f"{root}/{space}/@/{service}"
 
 
+def part_key(space: str, s_chunk: str, p_chunk: str, root: str = ROOT) -> str:
+    """Return the key of the part of each changeset about one (subject, predicate).
+
+    `s_chunk`, `p_chunk`: term chunks (`term_chunk`), or key-expression chunks
+    (`*`, `ac:robot7_$*`) to select several.
+    """
+    return f"{root}/{space}/@/changes/{s_chunk}/{p_chunk}"
+
+
 def escape(text: str) -> str:
     """Percent-escape the characters Zenoh forbids in a key chunk."""
-    return _FORBIDDEN_RE.sub(lambda m: _FORBIDDEN[m.group(0)], text)
+    for char, escaped in _FORBIDDEN.items():  # `%` first; str.replace is the fast way
+        if char in text:
+            text = text.replace(char, escaped)
+    return text
 
 
 def unescape(chunk: str) -> str:

@@ -14,6 +14,7 @@ import re
 from space.errors import InputError
 
 MAX_LIFESPAN = 10 * 365 * 24 * 3600.0  # seconds; beyond this, write it permanent
+EXPIRY_AGENT = "tspace-store"  # the agent of the changesets that retract expired writes
 _UNITS = {"ms": 0.001, "s": 1.0, "m": 60.0, "h": 3600.0, "": 1.0}
 _TEXT = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(ms|s|m|h|)\s*")
 

@@ -25,14 +25,14 @@ from typing import TYPE_CHECKING
 from rdflib import RDF, Graph, Literal
 from rdflib.term import Node
 
+from space._memory import BulkMemory
 from space.functional import declares_functional, replace_functional
-from space.memory import BulkMemory
 from space.terms import Triple
 
 if TYPE_CHECKING:
+    from space._subscription import Change, Subscription
     from space.changeset import Changeset
     from space.client import TripleSpace
-    from space.subscription import Change, Subscription
 
 # Which graph a triple is held for; a snapshot merges both, so its triples are "either".
 ASSERTED, INFERRED, EITHER = 1, 2, 4
@@ -80,7 +80,6 @@ class SpaceMirror:
     Args:
         triples: the triples to start from (held as asserted).
         history: how many recent changesets to remember for `recent` (attached only).
-        skip_subjects: leave out triples whose subject starts with this prefix.
 
     Attributes:
         graph: the live union graph; read it only from the thread that applies changes.
@@ -91,13 +90,11 @@ class SpaceMirror:
         triples: Iterable[Triple] = (),
         *,
         history: int = 200,
-        skip_subjects: str | None = None,
     ) -> None:
         self._store = BulkMemory()
         self.graph = Graph(store=self._store)
         self._origins: dict[Triple, int] = {}
         self._functional: set[Node] = set()
-        self._skip = skip_subjects
         self._recent: deque[ChangeRecord] = deque(maxlen=history)
         self._version = 0
         self._lock = threading.Lock()
@@ -132,8 +129,8 @@ class SpaceMirror:
             self._remove(triples, ASSERTED)
 
     def _add(self, triples: Iterable[Triple], origin: int) -> None:
-        store, origins, functional, skip = self._store, self._origins, self._functional, self._skip
-        triples = [t for t in triples if skip is None or not t[0].startswith(skip)]
+        store, origins, functional = self._store, self._origins, self._functional
+        triples = list(triples)
         functional.update(t[0] for t in triples if declares_functional(t))
         change = replace_functional(triples, functional.__contains__, store.objects_of)
         for old in change.replaced:

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import zenoh
 
+from space._heap import freeze_startup
+from space._session import open_router
 from space.errors import InputError
-from space.heap import freeze_startup
 from space.identity import Identity
-from space.session import open_router
 from space.store.guard import WriteGuard
 from space.store.server import StoreServer
 

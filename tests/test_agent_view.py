@@ -1,4 +1,4 @@
-"""An agent's view of the space: functional values replaced, firing records left out."""
+"""An agent's view of the space: functional values replaced, only what concerns its robot."""
 
 from rdflib import OWL, RDF, Literal, Namespace
 
@@ -21,7 +21,13 @@ def test_a_functional_value_replaces_the_old_one_even_before_its_removal_arrives
     assert len(view.objects(AC.b, AC.battery_level)) == 2
 
 
-def test_firing_records_stay_out_of_the_view():
-    added, _dropped = FiringLog().record("some_rule", "cause-1", AC.robot1)
-    view = View(added)
-    assert len(view.graph) == 0
+def test_a_robots_agent_keeps_neither_records_nor_other_robots_of_a_snapshot():
+    record, _dropped = FiringLog().record("some_rule", "cause-1", AC.robot1)
+    mine = [(AC.robot1, RDF.type, AC.Robot), (AC.robot1_battery, AC.charge_percent, Literal(5))]
+    site = [
+        (AC.hall, AC.crowd_level, Literal("high")),
+        (AC.battery_low, AC.below_percent, Literal(20)),
+    ]
+    others = [(AC.robot12, RDF.type, AC.Robot), (AC.robot12_battery, AC.charge_percent, Literal(9))]
+    view = View(View.concerning([*record, *mine, *site, *others], AC.robot1))
+    assert set(view.graph) == {*mine, *site}  # robot12 starts with "robot1": another robot still

@@ -87,3 +87,36 @@ def test_reason_reads_relative_iris_against_the_data_file(tmp_path, monkeypatch,
     state = Graph().parse(data=capsys.readouterr().out, format="turtle")
     base = tmp_path.as_uri()
     assert (URIRef(f"{base}/a"), URIRef(f"{base}/p"), URIRef(f"{base}/b")) in state
+
+
+def test_rules_check_refuses_a_rule_the_engine_cannot_run_as_the_reasoner_would(tmp_path, capsys):
+    # It parses, but no order of the body runs it: the reasoner would refuse it at load.
+    bad = tmp_path / "bad.rules"
+    bad.write_text("[r: (?x <urn:p> ?y), equal(?y, f(?x)) -> (?x <urn:q> ?y)]\n")
+    assert main(["rules", "check", str(bad)]) == 1
+    assert f"{bad}:1:22: in rule 'r': cannot order the builtins equal" in capsys.readouterr().err
+
+
+def test_rules_check_and_reason_run_backward_and_nested_rules_as_jena(tmp_path, capsys):
+    rules = tmp_path / "mixed.rules"
+    rules.write_text(
+        "@prefix ex: <http://example.org/>.\n"
+        "[dom: (?p ex:domain ?c) -> [(?x rdf:type ?c) <- (?x ?p ?y)]]\n"
+        "[back: (?x ex:near ?y) <- (?x ex:at ?y)]\n"
+        "[fwd: (?x ex:near ?y) -> (?x ex:close ?y)]\n"
+    )
+    assert main(["rules", "check", str(rules)]) == 0
+    out = capsys.readouterr().out
+    assert "dom  (backward, monotonic)" in out and "back  (backward, monotonic)" in out
+    assert "fwd  (monotonic)" in out
+    data = tmp_path / "d.ttl"
+    data.write_text(
+        "@prefix ex: <http://example.org/>.\nex:drives ex:domain ex:Robot.\n"
+        "ex:r1 ex:drives ex:base1 ; ex:at ex:dock.\n"
+    )
+    assert main(["reason", "--rules", str(rules), "--data", str(data)]) == 0
+    state = Graph().parse(data=capsys.readouterr().out, format="turtle")
+    ex = Namespace("http://example.org/")
+    assert (ex.r1, URIRef("http://www.w3.org/1999/02/22-rdf-syntax-ns#type"), ex.Robot) in state
+    assert (ex.r1, ex.near, ex.dock) in state
+    assert (ex.r1, ex.close, ex.dock) not in state  # Jena's forward rules never see it

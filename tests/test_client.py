@@ -174,20 +174,18 @@ def test_subscribe_with_snapshot_starts_from_current_state(ts):
     assert seen[1].added == [(AC.robot2_battery, AC.battery_level, Literal("full"))]
 
 
-def test_subscribe_can_skip_its_own_changes_and_a_namespace_of_subjects(server, ts, space_name):
-    record = (AC.firing_1, AC.rule_name, Literal("low battery"))
-    ts.write([record, ROBOT[0]])
+def test_subscribe_can_skip_its_own_changes(server, ts, space_name):
+    ts.write([ROBOT[0]])
     seen = []
-    ts.subscribe(None, seen.append, snapshot=True, skip_own=True, skip_subjects=AC.firing_)
+    ts.subscribe(None, seen.append, snapshot=True, skip_own=True)
     ts.write([ROBOT[1]])  # our own: skipped whole
     with TripleSpace.open(server.endpoint, space=space_name, agent="other") as other:
-        other.write([(AC.firing_2, AC.rule_name, Literal("x"))])  # nothing left: not delivered
-        other.write([(AC.firing_3, AC.rule_name, Literal("y")), ROBOT[2]])
+        other.write([ROBOT[2]])
         other.write([ROBOT[3]])
     wait_for(lambda: len(seen) >= 3, what="snapshot and two changes")
     assert seen[0].added == [ROBOT[0]]
     assert [(c.agent, c.added) for c in seen[1:]] == [("other", [ROBOT[2]]), ("other", [ROBOT[3]])]
-    assert seen[1].seq == seen[0].seq + 3  # after the two skipped, no gap to fill
+    assert seen[1].seq == seen[0].seq + 2  # after the one skipped, no gap to fill
 
 
 def test_no_store_means_space_unavailable_within_timeout(tmp_path):
@@ -279,7 +277,9 @@ def test_a_store_too_busy_to_answer_in_time_raises_space_timeout(ts):
         ts.write(big, timeout=0.05)
     with pytest.raises(SpaceTimeout, match=r"no answer from the store to the query within 0\.05 s"):
         ts.query((AC.s0, None, None), timeout=0.05)  # queued behind that write
-    wait_for(lambda: len(ts.query((None, AC.n, None))) == len(big), 30, "the late write")
+    # the query waits behind the late write: give it the deadline, not the 5 s default
+    everything = (None, AC.n, None)
+    wait_for(lambda: len(ts.query(everything, timeout=30)) == len(big), 30, "the late write")
 
 
 def test_the_readme_python_example_runs_on_a_fresh_space(server, space_name):

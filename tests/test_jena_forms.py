@@ -86,6 +86,31 @@ def test_table_is_accepted_and_hide_hides_from_listings_but_not_from_rules():
     assert (EX.a, EX.secret, EX.b) not in set(e.graph)
 
 
+def test_hide_hides_every_triple_naming_the_node_as_jena_filters_its_answers():
+    # Jena's rdfs-fb-tgc and OWL rule sets hide rb:xsdBase: its own typing as a property
+    # (concluded by rules about properties) is as hidden as its uses as a predicate.
+    e = engine(
+        "-> hide(ex:secret).\n"
+        "[s: (?x ex:p ?y) -> (?x ex:secret ?y)]\n"
+        "[prop: (?x ?p ?y) -> (?p rdf:type rdf:Property)]\n"
+        "[about: (?x ex:p ?y) -> (?y ex:about ex:secret)]\n",
+        [(EX.a, EX.p, EX.b)],
+    )
+    assert (EX.p, RDF.type, RDF.Property) in e
+    assert (EX.secret, RDF.type, RDF.Property) not in e  # as a subject
+    assert (EX.b, EX.about, EX.secret) not in e  # as an object
+    assert not any(EX.secret in t for t in e.graph)
+    assert e.count() == len(set(e.graph))
+    assert not any(EX.secret in t for t in e.triples())
+
+
+def test_hidden_triples_are_not_reported_in_an_update():
+    e = engine("-> hide(ex:secret).\n[s: (?x ex:p ?y) -> (?x ex:secret ?y)]\n", [])
+    delta = e.apply(added=[(EX.a, EX.p, EX.b)])
+    assert [c.triple for c in delta.added] == [(EX.a, EX.p, EX.b)]
+    assert delta.inferred_added == ()
+
+
 def test_hidden_predicates_are_not_matched_either():
     e = engine(
         "-> hide(ex:secret).\n[s: (?x ex:p ?y) -> (?x ex:secret ?y)]\n", [(EX.a, EX.p, EX.b)]
@@ -99,3 +124,15 @@ def test_include_takes_a_file_url_relative_to_the_including_file(tmp_path):
     outer.write_text(HEAD + "@include <file:inner.rules>\n[outer: (?a ex:q ?b) -> (?a ex:p ?b)]\n")
     rules = load_rules([outer], REG)
     assert [r.name for r in rules] == ["inner", "outer"]  # included rules first, as in Jena
+
+
+def test_a_shared_name_labels_a_rule_with_a_numeric_constant_by_file_and_line_too():
+    rules = parse_rules(
+        HEAD + "[r: (?x ex:n 1) -> (?x ex:one ex:yes)]\n[r: (?x ex:p ?y) -> (?x ex:q ?y)]\n",
+        REG,
+        source="t.rules",
+        warn=lambda message: None,
+    )
+    e = RuleEngine(rules, owl=False)
+    e.load([(EX.a, EX.n, Literal(1))])
+    assert e.why((EX.a, EX.one, EX.yes)).rule == "r (t.rules:2)"  # type: ignore[union-attr]

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import json
+import re
 import signal
 import time
 
 from agentprocs import HOSPITAL, value
-from rdflib import Namespace
+from rdflib import Literal, Namespace
 
 from conftest import AC_NS, wait_for
 
@@ -59,3 +61,35 @@ def test_the_robot_stops_taking_tasks_when_its_battery_monitor_dies(ts, launch) 
     monitor.start()
     wait_for(lambda: value(ts, AC.robot1, AC.battery_unknown) is None, 20, "the battery known")
     wait_for(lambda: value(ts, AC.robot1, AC.current_task) == AC.task_guiding, 15, "the task")
+
+
+def test_why_with_lifespan_shows_what_each_fact_has_left(ts, launch, run_tspace) -> None:
+    launch.start("reasoner", "--robot-file", str(HOSPITAL))
+    wait_for(lambda: value(ts, AC.robot1, AC.current_task) == AC.task_idle, 30, "the robot")
+    ts.write([(AC.robot1_battery, AC.battery_level, Literal("very low"))], lifespan=60)
+    wait_for(lambda: value(ts, AC.robot1_base, AC.motion_speed) == Literal("low"), 20)
+    ts.load_prefixes()
+
+    done = run_tspace("why", "--with-lifespan", "ac:robot1_base ac:motion_speed ?speed")
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    at = next(i for i, line in enumerate(lines) if 'battery_level "very low"' in line)
+    left = re.search(r"expires in ([0-9.]+) s unless written again", "\n".join(lines[at : at + 3]))
+    assert left is not None and 50 < float(left[1]) <= 60, done.stdout
+    robot = next(i for i, line in enumerate(lines) if line.endswith("ac:robot1 rdf:type ac:Robot"))
+    assert "permanent" in "\n".join(lines[robot : robot + 3]), done.stdout
+    first = re.search(
+        r"concluded from a fact that expires in ([0-9.]+) s; stays until changed", done.stdout
+    )
+    assert first is not None and 50 < float(first[1]) <= 60, done.stdout
+
+    done = run_tspace(
+        "why", "--with-lifespan", "--format", "json", "ac:robot1_base ac:motion_speed ?speed"
+    )
+    assert done.returncode == 0, done.stderr
+    [tree] = json.loads(done.stdout)
+    level = next(p for p in tree["premises"] if p["text"].endswith('battery_level "very low"'))
+    assert 50 < level["lifespan"] <= 60
+    robot = next(p for p in tree["premises"] if p["text"] == "ac:robot1 rdf:type ac:Robot")
+    assert robot["lifespan"] is None  # permanent
+    assert tree["lifespan"] is None  # a production rule's conclusion is written permanent

@@ -97,7 +97,7 @@ def test_bad_lifespans_are_refused_with_a_clear_error(ts: TripleSpace) -> None:
     wire["lifespan"] = -3
     import msgpack
 
-    from space.request import ask_store
+    from space._request import ask_store
 
     with pytest.raises(ChangesetRejected, match="lifespan"):
         ask_store(ts.session, ts._key("write"), msgpack.packb(wire), 5.0, what="write")

@@ -5,7 +5,7 @@ from __future__ import annotations
 from rdflib import Graph, Literal, URIRef
 from rdflib.plugins.stores.memory import SimpleMemory
 
-from space.memory import BulkMemory
+from space._memory import BulkMemory
 
 EX = "http://example.org/"
 

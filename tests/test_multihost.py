@@ -19,7 +19,7 @@ from netns import REPO, Host, Network, require_netns
 from rdflib import BNode, Graph, Literal, Namespace
 from rdflib.term import Node
 
-from agents.firings import is_record
+from agents.firings import without_records
 from conftest import AC_NS, wait_for
 from space import Change, TripleSpace
 from space.presence import alive_agents
@@ -80,8 +80,7 @@ def canonical(triples: Iterable[Triple]) -> frozenset[Triple]:
     """
     return frozenset(
         tuple(ANON if isinstance(x, BNode) else x for x in t)  # type: ignore[misc]
-        for t in triples
-        if not is_record(t)
+        for t in without_records(triples)
     )
 
 

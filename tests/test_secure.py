@@ -28,6 +28,7 @@ from space import (
     SpaceUnavailable,
     TripleSpace,
     _certs,
+    escape_key_chunk,
     load_identity,
 )
 from space.changeset import Changeset, pack, unpack
@@ -212,7 +213,9 @@ def test_robot2_cannot_write_under_robot1s_name(secure, fleet, space_name):
 def test_robot2_cannot_forge_a_change_notification(secure, fleet, space_name):
     seen: list = []
     raw_seen: list = []
+    scoped: list = []
     fleet.subscribe((None, None, None), seen.append)
+    fleet.subscribe(None, scoped.append, scope=[(AC.robot1_battery, None), (AC.robot2, None)])
     watcher = raw_session(secure, "hw_monitor.robot1")
     sub = watcher.declare_subscriber(f"tspace/{space_name}/t/**", raw_seen.append)
     session = raw_session(secure, "hw_monitor.robot2")
@@ -231,6 +234,9 @@ def test_robot2_cannot_forge_a_change_notification(secure, fleet, space_name):
         forged = Changeset(added=[(AC.robot1_battery, AC.battery_level, Literal("empty"))])
         forged.seq = seq + 1
         session.put(f"tspace/{space_name}/@/changes", forged.encode())
+        part = {**forged.to_wire(), "prev": 0}
+        s, p = (escape_key_chunk(f"<{x}>") for x in (AC.robot1_battery, AC.battery_level))
+        session.put(f"tspace/{space_name}/@/changes/{s}/{p}", pack(part))
         session.put(f'tspace/{space_name}/t/ac:robot1_battery/ac:battery_level/"empty"', b"")
         session.put(f"tspace/{space_name}/@/seq", pack({"seq": seq + 5}))
         fleet.write([(AC.robot2, AC.marker, Literal("real"))])
@@ -240,11 +246,13 @@ def test_robot2_cannot_forge_a_change_notification(secure, fleet, space_name):
             "the real change",
         )
         wait_for(lambda: any("marker" in str(s.key_expr) for s in raw_seen), 10, "its key")
+        wait_for(lambda: any(c.id != forged.id for c in scoped), 10, "the real part")
     finally:
         sub.undeclare()
         watcher.close()
         session.close()
     assert not any(c.id == forged.id for c in seen)
+    assert not any(c.id == forged.id for c in scoped)
     assert not any("empty" in str(s.key_expr) for s in raw_seen)
     assert battery(fleet, "robot1") == {Literal("high")}
 

@@ -100,6 +100,7 @@ function renderRobot(robot, state) {
   for (const field of card.querySelectorAll("[data-field]")) {
     field.textContent = text(values[field.dataset.field]);
   }
+  showFreshness(card.querySelector('dd[data-field="battery"]'), robot.battery_fresh, "reading");
   card.querySelector(".presence").className = `badge presence ${slug(robot.presence)}`;
   card.querySelector(".presence").hidden = !robot.presence;
   card.querySelector(".site").hidden = !robot.site;
@@ -125,6 +126,7 @@ function deviceRow(robot, device) {
       cell.classList.add("pending");
       cell.title = "the device has not obeyed yet";
     }
+    if (key === "reported") showFreshness(cell, device.reported_fresh, "report");
     row.append(cell);
   }
   const cell = document.createElement("td");
@@ -211,6 +213,34 @@ function addHistory(events, reset) {
   queueRedraw();
 }
 
+// A reading written with a lifespan: greyed out once less than a third of it is left (its
+// writer missed its renewals: it is about to expire); once the store retracted it, since when
+// there has been none and what it last said. `fresh`: see agents/hmi_freshness.py.
+function showFreshness(element, fresh, what) {
+  delete element.dataset.expires;
+  element.classList.remove("expiring", "stale");
+  if (!fresh) return;
+  if (fresh.stale_since) {
+    const since = new Date(fresh.stale_since).toLocaleTimeString();
+    element.textContent = `no ${what} since ${since} (last: ${fresh.last})`;
+    element.classList.add("stale");
+    element.title = `the ${what} expired: its writer stopped renewing it`;
+    return;
+  }
+  element.dataset.expires = fresh.expires;
+  element.dataset.life = fresh.life;
+  ageFreshness(element);
+}
+
+function ageFreshness(element) {
+  const left = (Number(element.dataset.expires) - Date.now()) / 1000;
+  const expiring = left < Number(element.dataset.life) / 3;
+  element.classList.toggle("expiring", expiring);
+  element.title = expiring
+    ? `about to expire: ${Math.max(0, left).toFixed(1)} s left, not renewed`
+    : `expires in ${left.toFixed(0)} s unless written again`;
+}
+
 function renderSites(robots) {
   const sites = [...new Set(robots.map((r) => r.site).filter(Boolean))].sort();
   const filter = document.getElementById("site-filter");
@@ -250,4 +280,5 @@ document.getElementById("range-select").addEventListener("change", queueRedraw);
 document.getElementById("site-select").addEventListener("change", () => lastState && render(lastState));
 window.addEventListener("resize", queueRedraw);
 setInterval(queueRedraw, 5000); // time moves on: the spans that last until now grow
+setInterval(() => document.querySelectorAll("[data-expires]").forEach(ageFreshness), 500);
 connect();

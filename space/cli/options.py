@@ -94,9 +94,9 @@ def open_space(args: argparse.Namespace, agent: str, *, create: bool = False) ->
             the `--secure` directory lacks the identity's certificate.
         SpaceUnavailable, SpaceTimeout: no router, or no store answered.
     """
+    from space._session import open_session
     from space.client import TripleSpace
     from space.keys import check_space
-    from space.session import open_session
 
     if args.space is not None:
         check_space(args.space)
@@ -124,9 +124,9 @@ def store_spaces(session: zenoh.Session, timeout: float) -> dict[str, int]:
     Raises:
         SpaceUnavailable, SpaceTimeout: no store answered.
     """
+    from space._request import ask_store
     from space.changeset import pack
     from space.keys import ROOT
-    from space.request import ask_store
 
     reply = ask_store(session, f"{ROOT}/@repl/spaces", pack({}), timeout, what="spaces request")
     return {str(k): int(v) for k, v in reply.items() if isinstance(v, int)}

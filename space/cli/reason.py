@@ -18,7 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "owl:FunctionalProperty in the update replaces the asserted old value. "
         "The production rules that fired, and what print() prints, go to stderr. "
         "OWL RL runs with the rules only when an --ontology is given (and not --no-owl); "
-        "otherwise only the rules run, as Jena's GenericRuleReasoner runs them. "
+        "otherwise only the rules run, as Jena's GenericRuleReasoner runs them (backward "
+        "rules and rules nested in heads over the forward rules' closure, as its hybrid mode). "
         "The OWL 2 RL conflicts (triples that cannot all hold) are listed on stderr.",
     )
     p.add_argument("--rules", nargs="+", required=True, metavar="RULES", help="rules files")

@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Subscribe and print lines from the main thread (flushed, so pipes see them at once)."""
     from space._display import triple_text
-    from space.subscription import Change
+    from space._subscription import Change
 
     lines: queue.SimpleQueue[Change] = queue.SimpleQueue()
     with open_space(args, agent="tspace-watch") as ts:

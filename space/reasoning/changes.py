@@ -44,6 +44,11 @@ class ChangeLog:
         if t not in before:
             before[t] = _STATES[t in self._triples][t in self._asserted]
 
+    @property
+    def before(self) -> dict[T, tuple[bool, bool]]:
+        """Return, for each triple this update touched, (was present, was asserted); read only."""
+        return self._before
+
     def net(self) -> tuple[list[T], list[T]]:
         """Return the triples (functor-valued ones too) present now and not before, and back."""
         triples = self._triples
@@ -58,6 +63,7 @@ class ChangeLog:
         by_rules: tuple[list[Triple], list[Triple]] = ([], [])
         inferred: tuple[list[Triple], list[Triple]] = ([], [])
         functors, triples, asserted = self._terms.functors, self._triples, self._asserted
+        hidden, shown = self._terms.hidden, self._terms.shown
         expected, decode = self._expected, self._terms.triple
         for t, (was_present, was_asserted) in self._before.items():
             is_present, is_asserted = t in triples, t in asserted
@@ -67,7 +73,7 @@ class ChangeLog:
             by_rule = is_asserted != expected.get(t, was_asserted)
             if is_present == was_present and is_asserted == was_asserted and not by_rule:
                 continue
-            if t[2] in functors:
+            if t[2] in functors or (hidden and not shown(t)):
                 continue
             triple = decode(t)
             if is_present != was_present:

@@ -115,6 +115,12 @@ class RuleIndex:
             if isinstance(item, Pattern):
                 entry = (compiled, compiler.trigger(rule, slots, index))
                 self._file(entry, item.p, item.o, compiler)
+            elif item.name == "countLiteralValues" and rule.backward:
+                # Jena counts again at each query: wake the rule on every addition and
+                # removal with the counted predicate (what it concluded from an old count
+                # is withdrawn, space/reasoning/withdraw.py).
+                entry = (compiled, compiler.trigger(rule, slots, index))
+                self._on_change(entry, item.args[1], compiler)
             elif item.name == "noValue" and compiled.production:
                 entry = (compiled, compiler.trigger(rule, slots, index))
                 predicate = item.args[1]
@@ -124,6 +130,15 @@ class RuleIndex:
                     key = compiler.constant(predicate)
                     self._removal_by_p.setdefault(key, []).append(entry)
         return compiled
+
+    def _on_change(self, entry: Entry, p: object, compiler: JoinCompiler) -> None:
+        if isinstance(p, Var | Functor):
+            self.anywhere.append(entry)
+            self._removal_anywhere.append(entry)
+        else:
+            key = compiler.constant(p)  # type: ignore[arg-type]
+            self.by_p.setdefault(key, []).append(entry)
+            self._removal_by_p.setdefault(key, []).append(entry)
 
     def _file(self, entry: Entry, p: object, o: object, compiler: JoinCompiler) -> None:
         if isinstance(p, Var | Functor):

@@ -16,7 +16,6 @@ from pathlib import Path
 from rdflib import OWL, BNode, Graph, URIRef
 from rdflib.term import Node
 
-from space._turtle import read_turtle
 from space.errors import InputError
 from space.reasoning.agenda import Agenda
 from space.reasoning.builtins import Context, Registry, default_registry
@@ -25,16 +24,18 @@ from space.reasoning.checks import check_rule, mark_shared_names
 from space.reasoning.compile import CompiledRule, RuleIndex
 from space.reasoning.conflicts import Conflict, read_conflicts
 from space.reasoning.delta import Delta, Firing, Origin, Why
-from space.reasoning.errors import RuleError, RuleLoopError, unreadable
+from space.reasoning.errors import RuleError, RuleLoopError
 from space.reasoning.forms import value_patterns
 from space.reasoning.joins import JoinCompiler, Match
 from space.reasoning.owl import owl_rules
 from space.reasoning.parser import load_rules
+from space.reasoning.rdffiles import rdf_graph, read_graph
 from space.reasoning.rules import Rule
 from space.reasoning.support import Support
-from space.reasoning.terms import FunctorValue, TermTable
+from space.reasoning.terms import TermTable
 from space.reasoning.triples import T, TripleStore
 from space.reasoning.view import live_graph
+from space.reasoning.withdraw import Withdrawals, withdrawable
 from space.terms import Triple
 
 
@@ -71,7 +72,7 @@ class RuleEngine:
         for rule in self.rules:
             check_rule(rule)
         runnable = [value_patterns(r, self.registry) for r in self.rules]
-        tbox = ontology if isinstance(ontology, Graph) else _graph(ontology or ())
+        tbox = ontology if isinstance(ontology, Graph) else rdf_graph(ontology or ())
         self.terms = TermTable() if terms is None else terms  # HybridEngine: shared
         self._store = TripleStore()
         self._ctx = Context(self.terms, self._store, printer)
@@ -80,6 +81,9 @@ class RuleEngine:
         extra = owl_rules(tbox) if owl else []
         self._compiled = [index.add(compiler, r, i) for i, r in enumerate([*runnable, *extra])]
         self._index = index
+        # Backward rules with noValue: their conclusions go when no match holds (as Jena's).
+        held = [c.order for c in self._compiled if c.rule.backward and withdrawable(c)]
+        self._withdrawals = Withdrawals(held) if held else None
         self._ontology = [self._encode(t) for t in tbox]
         self._asserted: set[T] = set()
         self._asserted_by: dict[T, tuple[int, tuple[T, ...]]] = {}
@@ -124,15 +128,19 @@ class RuleEngine:
 
     def count(self) -> int:
         """Return how many triples the state holds (asserted and inferred)."""
+        if self.terms.hidden:  # `hide` was called: count what is listed
+            return sum(1 for t in self._store if self.terms.shown(t))
         osp, functors = self._store.osp, self.terms.functors
-        hidden = sum(len(ps) for f in functors for ps in osp.get(f, {}).values())
-        return len(self._store) - hidden
+        unlisted = sum(len(ps) for f in functors for ps in osp.get(f, {}).values())
+        return len(self._store) - unlisted
 
     def triples(self, origin: Origin | None = None) -> Iterator[Triple]:
         """Yield the current triples, or only the asserted or only the inferred ones."""
-        functors, hidden = self.terms.functors, self._ctx.hidden
+        functors, hidden = self.terms.functors, self.terms.hidden
         for t in self._store:
-            if t[2] in functors or t[1] in hidden or t[0] in functors:
+            if t[2] in functors or t[0] in functors:
+                continue
+            if hidden and (t[0] in hidden or t[1] in hidden or t[2] in hidden):
                 continue
             if origin is None or (t in self._asserted) == (origin is Origin.ASSERTED):
                 yield self._decode(t)
@@ -149,16 +157,21 @@ class RuleEngine:
         ids = [None if x is None else self.terms.find(x) for x in pattern]
         if any(i is None and x is not None for i, x in zip(ids, pattern, strict=True)):
             return  # a term the engine never saw: nothing matches
-        functors, hidden = self.terms.functors, self._ctx.hidden
+        functors, hidden = self.terms.functors, self.terms.hidden  # as TermTable.shown, inlined
         for t in self._store.match(*ids):
-            if t[2] not in functors and t[1] not in hidden and t[0] not in functors:
-                yield self._decode(t)
+            if t[2] in functors or t[0] in functors:
+                continue
+            if hidden and (t[0] in hidden or t[1] in hidden or t[2] in hidden):
+                continue
+            yield self._decode(t)
 
     def __contains__(self, triple: object) -> bool:
         ids = tuple(self.terms.find(x) for x in triple) if isinstance(triple, tuple) else ()
         if len(ids) == 3 and ids[0] == ids[2] and ids[0] is not None and ids[1] == self._same:
             return self._in_state(ids[0])  # eq-ref, answered rather than stored
-        return len(ids) == 3 and ids in self._store
+        if len(ids) != 3 or ids not in self._store:
+            return False
+        return not self.terms.hidden or self.terms.shown(ids)  # type: ignore[arg-type]
 
     def _in_state(self, term: int) -> bool:
         store = self._store
@@ -212,6 +225,8 @@ class RuleEngine:
             if not self._loaded:
                 self._start()
             self._run_agenda()
+            if self._withdrawals is not None:
+                self._withdraw()
         except RuleLoopError as loop:
             self._undo()
             loop.kept = self._apply_monotonic(plus, minus)
@@ -388,6 +403,10 @@ class RuleEngine:
             guards = compiled.guards
             if guards and any(b.run(ctx, args(bindings)) is None for b, args in guards):
                 continue
+            held = self._withdrawals
+            if held is not None and compiled.order in held.orders:
+                if held.known(compiled, premises, bindings):
+                    continue  # woken again on a match that concluded already
             agenda.count(compiled)
             fire(compiled, premises, bindings)
 
@@ -403,10 +422,19 @@ class RuleEngine:
         if removed:
             self._unassert(removed, notify=True)
         self._assert(heads, (compiled.order, premises))
+        if self._withdrawals is not None:
+            self._withdrawals.note(compiled, premises, bindings, heads, self._asserted_by)
         functors = self.terms.functors
         asserted = tuple(t for t in heads if t[2] not in functors) if functors else heads
         retracted = dropped + removed if removed else dropped
         self._firings.append(Firing(compiled.label, premises, asserted, retracted, self._triple))
+
+    def _withdraw(self) -> None:
+        """Retract what backward rules with noValue concluded from matches that hold no more."""
+        assert self._withdrawals is not None
+        while stale := self._withdrawals.stale(self._store.triples, self._asserted, self._ctx):
+            self._unassert(stale, notify=True)
+            self._run_agenda()
 
     def _undo(self) -> None:
         """Reverse this update's assertions and retractions, with production rules off."""
@@ -421,59 +449,3 @@ class RuleEngine:
         finally:
             self._production = True
             self._agenda.reset()
-
-
-def read_graph(paths: Iterable[str | Path]) -> Graph:
-    """Read RDF files (format from the suffix, Turtle by default) into one graph.
-
-    Raises:
-        InputError: a file is missing or malformed.
-    """
-    graph = Graph()
-    for path in paths:
-        if _format(Path(path)) == "turtle":
-            # One-line errors with file and line (binary, not UTF-8, ill-typed literals too).
-            try:
-                graph += read_turtle(str(path), base=Path(path).resolve().as_uri())
-            except InputError as exc:
-                if isinstance(exc.__cause__, OSError):  # said as every unreadable file is
-                    raise InputError(unreadable(path, exc.__cause__)) from exc.__cause__
-                raise
-            continue
-        try:
-            # Opened here, not by rdflib, which names a missing relative path by a wrong
-            # absolute one; the base for relative IRIs stays the file's own IRI.
-            with open(path, "rb") as handle:
-                base = Path(path).resolve().as_uri()
-                graph.parse(file=handle, format=_format(Path(path)), publicID=base)
-        except OSError as exc:
-            raise InputError(unreadable(path, exc)) from exc
-        except (SyntaxError, ValueError) as exc:
-            raise InputError(f"{path}: {exc}") from exc
-    return graph
-
-
-def _format(path: Path) -> str:
-    suffix = path.suffix.lower()
-    return {
-        ".nt": "nt",
-        ".rdf": "xml",
-        ".owl": "xml",
-        ".xml": "xml",
-        ".n3": "n3",
-        ".jsonld": "json-ld",
-    }.get(suffix, "turtle")
-
-
-def _graph(triples: Iterable[Triple]) -> Graph:
-    graph = Graph()
-    for triple in triples:
-        s, p, o = triple
-        # A rule may put a literal or a functor where RDF allows none: not in a Graph.
-        if (
-            isinstance(s, URIRef | BNode)
-            and isinstance(p, URIRef)
-            and not isinstance(o, FunctorValue)
-        ):
-            graph.add(triple)
-    return graph

@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 from decimal import Decimal
 
 from rdflib import Literal
@@ -74,7 +75,7 @@ def value_patterns(rule: Rule, registry: Registry) -> Rule:
         body.append(item)
     if not tests:
         return rule
-    return Rule(rule.name, (*body, *tests), rule.head, rule.where, rule.backward)
+    return replace(rule, body=(*body, *tests))  # keeps `shared_name`: the label stays
 
 
 def _by_value(term: Term, tests: list[Call], equal: Builtin, item: Pattern) -> Term:

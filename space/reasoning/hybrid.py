@@ -1,13 +1,18 @@
-"""Run a rule set that mixes forward and backward rules in two layers, as Jena's hybrid mode.
+"""Run a rule set with backward rules in two layers, as Jena's hybrid mode.
 
 In Jena's FBRuleReasoner the forward rules run to a closure over the data alone; the
 backward rules (and the rules nested in forward heads, which Jena adds to its backward
 engine) answer over that closure and never feed the forward rules. Here the forward
-layer is one engine; the backward layer is a second engine, sharing its term table,
-whose input is the forward layer's whole state (functor values included) and whose
-state is what this engine answers. With Jena's bundled `rdfs-fb` rule sets this gives
-Jena's closure; one engine with every rule gives more (forward rules would see what
-backward rules conclude).
+layer is one engine (with OWL RL, if any); the backward layer is a second engine,
+sharing its term table, whose input is the forward layer's whole state (functor values
+included) and whose state is what this engine answers. Both layers are incremental: an
+update passes the forward layer's net change on to the backward layer. With Jena's
+bundled `rdfs-fb` and OWL rule sets this gives Jena's closure; one engine with every
+rule gives more (forward rules would see what backward rules conclude).
+
+`build_engine` is the one entry point that runs every rule form: a plain `RuleEngine`
+for forward rules only (the paper's rules pay nothing), two layers when there are
+backward or nested rules.
 """
 
 from __future__ import annotations
@@ -20,12 +25,16 @@ from rdflib import Graph
 from rdflib.term import Node
 
 from space.reasoning.builtins import Registry, default_registry
+from space.reasoning.checks import mark_shared_names
 from space.reasoning.conflicts import Conflict
 from space.reasoning.delta import Delta, Origin, TripleChange, Why
-from space.reasoning.engine import RuleEngine, read_graph
+from space.reasoning.engine import RuleEngine
+from space.reasoning.errors import RuleLoopError
 from space.reasoning.parser import load_rules
+from space.reasoning.rdffiles import read_graph
 from space.reasoning.rules import Rule
 from space.reasoning.terms import TermTable
+from space.reasoning.triples import T
 from space.terms import Triple
 
 
@@ -34,10 +43,16 @@ def mixes_forms(rules: Sequence[Rule]) -> bool:
     return any(r.backward for r in rules) and any(not r.backward for r in rules)
 
 
-class HybridEngine:
-    """Two layers: forward rules over the data, backward rules over the forward closure.
+def has_backward(rules: Sequence[Rule]) -> bool:
+    """Return whether a rule set needs the backward layer (a backward or nested rule)."""
+    return any(r.backward for r in rules)
 
-    Offers `RuleEngine`'s reading and updating calls. Not thread-safe (as `RuleEngine`).
+
+class HybridEngine:
+    """Two layers: forward rules (and OWL RL) over the data, backward rules over their closure.
+
+    Offers `RuleEngine`'s reading and updating calls, with the same `Delta` and
+    `RuleLoopError` contract. Not thread-safe (as `RuleEngine`).
     """
 
     def __init__(
@@ -51,7 +66,8 @@ class HybridEngine:
         printer: Callable[[str], None] = print,
     ) -> None:
         registry = registry or default_registry()
-        terms = TermTable()
+        rules = mark_shared_names(rules)  # a name shared across the layers labels both
+        terms = TermTable()  # shared: one id per term, one set of hidden nodes
         common = {"registry": registry, "max_firings": max_firings, "printer": printer}
         self.forward = RuleEngine(
             [r for r in rules if not r.backward], ontology, owl=owl, terms=terms, **common
@@ -59,21 +75,29 @@ class HybridEngine:
         self.backward = RuleEngine(
             [r for r in rules if r.backward], owl=False, terms=terms, **common
         )
-        # `hide` in either layer hides from what this engine lists.
-        self.backward._ctx.hidden = self.forward._ctx.hidden
         self.rules = (*self.forward.rules, *self.backward.rules)
+        self.registry = registry
         self.terms = terms
 
     @property
     def graph(self) -> Graph:
-        """Return the current state as an rdflib Graph; do not modify it."""
+        """Return the current state as a live, read-only rdflib Graph (see `RuleEngine.graph`)."""
         return self.backward.graph
 
     def triples(self, origin: Origin | None = None) -> Iterator[Triple]:
-        """Yield the current triples, or only the asserted or only the inferred ones."""
-        for triple in self.backward.triples():
-            if origin is None or (self._asserted(triple) == (origin is Origin.ASSERTED)):
-                yield triple
+        """Yield the current triples, or only the asserted or only the inferred ones.
+
+        Asserted means asserted in the forward layer (by a caller or a production rule);
+        what backward rules conclude is inferred.
+        """
+        if origin is None:
+            yield from self.backward.triples()
+            return
+        asserted, want = self.forward._asserted, origin is Origin.ASSERTED
+        shown, decode = self.terms.shown, self.terms.triple
+        for t in self.backward._store:
+            if shown(t) and (t in asserted) == want:
+                yield decode(t)  # type: ignore[misc]
 
     def match(
         self, subject: Node | None = None, predicate: Node | None = None, obj: Node | None = None
@@ -94,13 +118,17 @@ class HybridEngine:
 
     def load(self, triples: Graph | Iterable[Triple] = ()) -> Delta:
         """Assert the initial state and run both layers (see `RuleEngine.load`)."""
-        first = self.forward.load(triples)
-        return self._pass_on(first)
+        return self._both(lambda: self.forward.load(triples))
 
     def apply(self, added: Iterable[Triple] = (), removed: Iterable[Triple] = ()) -> Delta:
-        """Retract, assert, run both layers; return the net change (see `RuleEngine.apply`)."""
-        first = self.forward.apply(added, removed)
-        return self._pass_on(first)
+        """Retract, assert, run both layers; return the net change (see `RuleEngine.apply`).
+
+        Raises:
+            InputError: a triple is not an RDF triple of rdflib terms.
+            RuleLoopError: production rules of either layer kept firing; as
+                `RuleEngine.apply`, their firings are undone and `kept` is what stays.
+        """
+        return self._both(lambda: self.forward.apply(added, removed))
 
     def why(self, triple: Triple) -> Why | None:
         """Return why a triple holds, from the layer that concluded it."""
@@ -109,43 +137,90 @@ class HybridEngine:
             return self.forward.why(triple)
         return found
 
-    def _asserted(self, triple: Triple) -> bool:
-        found = self.forward.why(triple)
-        return found is not None and found.asserted
-
-    def _pass_on(self, first: Delta) -> Delta:
+    def _both(self, first_layer: Callable[[], Delta]) -> Delta:
+        """Run the forward layer, pass its net change to the backward layer, merge the two."""
+        loop: RuleLoopError | None = None
+        try:
+            first = first_layer()
+        except RuleLoopError as exc:
+            loop, first = exc, exc.kept  # type: ignore[assignment]
         plus, minus = self.forward._log.net()
-        second = self.backward._apply_ids(plus, minus)
+        try:
+            second = self.backward._apply_ids(plus, minus)
+        except RuleLoopError as exc:
+            loop, second = loop or exc, exc.kept  # type: ignore[assignment]
+        delta = self._merge(first, second)
+        if loop is not None:
+            loop.kept = delta
+            raise loop
+        return delta
 
-        def origin(change: TripleChange) -> TripleChange:
-            asserted = change.triple in first.asserted_added or self._asserted(change.triple)
-            return TripleChange(change.triple, Origin.ASSERTED if asserted else Origin.INFERRED)
-
-        added = tuple(origin(c) for c in second.added)
+    def _merge(self, first: Delta, second: Delta) -> Delta:
+        """Return the net change of the whole state: present in the backward layer's state,
+        asserted when asserted in the forward layer (as `ChangeLog.delta` for one engine)."""
+        forward_before, backward_before = self.forward._log.before, self.backward._log.before
+        asserted, present = self.forward._asserted, self.backward._store.triples
+        shown, decode = self.terms.shown, self.terms.triple
+        added: list[TripleChange] = []
+        removed: list[TripleChange] = []
+        inferred: tuple[list[Triple], list[Triple]] = ([], [])
+        touched: dict[T, None] = dict.fromkeys(forward_before)
+        touched.update(dict.fromkeys(backward_before))
+        for t in touched:
+            if not shown(t):
+                continue
+            was_present = backward_before[t][0] if t in backward_before else t in present
+            was_asserted = forward_before[t][1] if t in forward_before else t in asserted
+            is_present, is_asserted = t in present, t in asserted
+            triple: Triple = decode(t)  # type: ignore[assignment]
+            if is_present != was_present:
+                now = is_asserted if is_present else was_asserted
+                change = TripleChange(triple, Origin.ASSERTED if now else Origin.INFERRED)
+                (added if is_present else removed).append(change)
+            was_inferred = was_present and not was_asserted
+            if (is_present and not is_asserted) != was_inferred:
+                inferred[1 if was_inferred else 0].append(triple)
         return Delta(
-            added=added,
-            removed=second.removed,
+            added=tuple(added),
+            removed=tuple(removed),
             asserted_added=first.asserted_added,
             asserted_removed=first.asserted_removed,
-            inferred_added=tuple(c.triple for c in added if c.origin is Origin.INFERRED),
-            inferred_removed=tuple(c.triple for c in second.removed),
+            inferred_added=tuple(inferred[0]),
+            inferred_removed=tuple(inferred[1]),
             firings=(*first.firings, *second.firings),
         )
+
+
+Engine = RuleEngine | HybridEngine
+
+
+def build_engine(
+    rules: Sequence[Rule],
+    ontology: Graph | Iterable[Triple] | None = None,
+    **options: Any,
+) -> Engine:
+    """Return the engine that runs every form in the rules: one layer for forward rules only,
+    two (`HybridEngine`) when there are backward or nested rules. Options as `RuleEngine`'s.
+
+    Raises:
+        RuleError: a rule cannot be compiled.
+    """
+    kind = HybridEngine if has_backward(rules) else RuleEngine
+    return kind(rules, ontology, **options)
 
 
 def engine_from_files(
     rules: Iterable[str | Path] = (),
     ontology: Iterable[str | Path] = (),
     **options: Any,
-) -> RuleEngine | HybridEngine:
-    """Build an engine from files as `RuleEngine.from_files`, in two layers when the rules mix
-    forward and backward rules (Jena's hybrid mode).
+) -> Engine:
+    """Build an engine from files as `RuleEngine.from_files`, with `build_engine`'s choice.
 
     Raises:
         RuleSyntaxError, RuleError: a rules file is invalid.
         InputError: an ontology file cannot be read or parsed.
     """
     registry = options.pop("registry", None) or default_registry()
-    parsed = load_rules(rules, registry)
-    kind = HybridEngine if mixes_forms(parsed) else RuleEngine
-    return kind(parsed, read_graph(ontology), registry=registry, **options)
+    warn = options.pop("warn", None)
+    parsed = load_rules(rules, registry, **({} if warn is None else {"warn": warn}))
+    return build_engine(parsed, read_graph(ontology), registry=registry, **options)

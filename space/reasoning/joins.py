@@ -182,7 +182,9 @@ class _Body:
             self._seed(item.terms, seed)
             del patterns[seed]
         else:
-            seeded = (*item.args, None) if len(item.args) == 2 else item.args
+            # noValue(s, p[, o]) seeds what it names; countLiteralValues(s, p, n) s and p.
+            counts = item.name == "countLiteralValues"
+            seeded = (*item.args[:2], None) if len(item.args) == 2 or counts else item.args
             self._seed(tuple(_in_join(a, self.pattern_vars) for a in seeded), None)
         while True:
             self._place_calls(calls, deferred=False)

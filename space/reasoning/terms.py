@@ -58,6 +58,7 @@ class TermTable:
         self._terms: list[Value] = []
         self.keys: list[object] = []
         self.functors: set[int] = set()
+        self.hidden: set[int] = set()  # nodes `hide` keeps out of listings (as Jena's FB graph)
 
     def __len__(self) -> int:
         return len(self._terms)
@@ -83,6 +84,14 @@ class TermTable:
         """Return the id of a term, or None if it was never seen."""
         found = self._ids.get(term)
         return found if found is not None else self._ids.get(simple(term))
+
+    def shown(self, t: tuple[int, int, int]) -> bool:
+        """Tell whether a triple is listed: no functor value, no hidden node in it (Jena lists
+        neither; rules see both)."""
+        functors, hidden = self.functors, self.hidden
+        if t[2] in functors or t[0] in functors:
+            return False
+        return not hidden or (t[0] not in hidden and t[1] not in hidden and t[2] not in hidden)
 
     def term(self, i: int) -> Value:
         """Return the term of an id."""

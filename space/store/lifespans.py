@@ -32,11 +32,13 @@ import logging
 import time
 import uuid
 from collections.abc import Callable
+from functools import lru_cache
 from typing import TYPE_CHECKING
 from urllib.parse import quote, unquote
 
 import pyoxigraph as ox
 
+from space.lifespan import EXPIRY_AGENT
 from space.store.db import StoreDB
 from space.store.intake import WriteRequest
 from space.store.oxterms import OxTriple
@@ -47,12 +49,18 @@ if TYPE_CHECKING:
 log = logging.getLogger("tspace.store")
 
 LEASE = "urn:tspace:lease:"
-EXPIRY_AGENT = "tspace-store"  # the agent of the changesets retracting expired writes
-BUDGET = 64  # triples retracted per writer turn at most (a bigger write expires whole)
+# A writer turn of expiries retracts about BUDGET triples' worth of commit, a changeset
+# (its log entry, seq, publication) costing as much as CHANGESET triples. While writes
+# come in, a turn is one expired write (BUSY), so a write waits for one at most. The
+# first write of a turn expires whole, whatever its size.
+BUDGET = 64
+BUSY = 1
+CHANGESET = 16
 
 _Group = tuple[str, float, str]  # space, expiry (unix seconds), write id
 
 
+@lru_cache(maxsize=4096)
 def lease_graph(group: _Group) -> ox.NamedNode:
     """Return the graph holding the triples a write leased until its expiry."""
     space, expires, request = group
@@ -133,7 +141,9 @@ class Leases:
         return self._heap[0][0] if self._heap else None
 
     def due(self, now: float, budget: int = BUDGET) -> list[tuple[_Group, list[OxTriple]]]:
-        """Return the writes expired by `now` with their leased triples, about `budget` at most.
+        """Return the writes expired by `now` with their leased triples, about `budget` in cost.
+
+        Each write costs its triples plus `CHANGESET`; the first is returned whatever its size.
 
         Their leases are released here: the changesets retracting them are
         committed with the release of their lease quads.
@@ -146,7 +156,7 @@ class Leases:
             for t in triples:
                 self._release(group[0], t)
             found.append((group, triples))
-            count += len(triples)
+            count += len(triples) + CHANGESET
         return found
 
     def _lease(self, group: _Group, t: OxTriple) -> None:
@@ -172,15 +182,21 @@ class Leases:
 
 
 def retractions(
-    leases: Leases, space: Callable[[str], SpaceState], stamp: Callable[[], str], now: float
+    leases: Leases,
+    space: Callable[[str], SpaceState],
+    stamp: Callable[[], str],
+    now: float,
+    budget: int = BUDGET,
 ) -> list[tuple[SpaceState, Net | None]]:
-    """Decide one changeset per write expired by `now`, retracting what it still leased.
+    """Decide one changeset per write expired by `now` (about `budget` in cost, see `due`).
+
+    Each retracts what its write still leased.
 
     Each is attributed to the store (`EXPIRY_AGENT`) and names the expired
     write as its `cause`. Writer thread only; the caller commits them.
     """
     decided = []
-    for (name, _expires, request), triples in leases.due(now):
+    for (name, _expires, request), triples in leases.due(now, budget):
         state = space(name)
         write = WriteRequest(
             id=uuid.uuid4().hex, agent=EXPIRY_AGENT, cause=request, removed=triples

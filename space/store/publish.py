@@ -1,4 +1,5 @@
-"""Publish committed changesets: whole on `@/changes`, then triple by triple on their keys."""
+"""Publish committed changesets: whole on `@/changes`, in parts by subject and predicate
+(`space.store.parts`), then triple by triple on their keys."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import zenoh
 
 from space import keys
 from space.changeset import pack
+from space.store.parts import PartPublisher
 from space.store.state import Net, SpaceState
 from space.terms import triple_from_nt
 
@@ -23,12 +25,14 @@ class Publisher:
         self.session = session
         self.root = root
         self._graph_publishers: dict[tuple[str, str], zenoh.Publisher] = {}
+        self._parts = PartPublisher(session, root)
 
     def close(self) -> None:
         """Undeclare the publishers used to learn whether anyone watches a graph."""
         for publisher in self._graph_publishers.values():
             publisher.undeclare()
         self._graph_publishers = {}
+        self._parts.close()
 
     def publish(self, committed: list[tuple[SpaceState, Net]]) -> None:
         """Publish committed changesets, whole first (every agent waits for them), then triples."""
@@ -36,6 +40,8 @@ class Publisher:
         for state, net in committed:
             key = keys.service_key(state.name, "changes", self.root)
             self.session.put(key, net.entry.payload, congestion_control=block)
+        for state, net in committed:
+            self._parts.publish(state, net)
         for state, net in committed:
             self._triples(state, net)
 

@@ -16,10 +16,10 @@ import pyoxigraph as ox
 import zenoh
 
 from space import keys
+from space._request import TIME_LIMIT
 from space.changeset import pack
 from space.errors import MalformedPayload, QueryError, QueryTimeLimit
 from space.prefixes import PrefixMap
-from space.request import TIME_LIMIT
 from space.store import oxterms
 from space.store.db import META, SEQ, StoreDB, graph, space_node
 from space.store.intake import QueryRequest

@@ -23,9 +23,9 @@ from collections.abc import Callable
 import zenoh
 
 from space import keys
+from space._request import ask_store
 from space.changeset import Changeset, pack
 from space.errors import MalformedPayload, SpaceError
-from space.request import ask_store
 from space.store.db import CommitFailed, StoreDB
 from space.store.state import SpaceState
 

@@ -26,7 +26,7 @@ import zenoh
 from space import keys
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload, QueryError, SpaceError
-from space.store import intake, queries
+from space.store import intake, lifespans, queries
 from space.store.acks import AckGate
 from space.store.db import StoreDB
 from space.store.guard import WriteGuard, writer_of
@@ -42,6 +42,8 @@ log = logging.getLogger("tspace.store")
 
 _BATCH = 256
 HEARTBEAT = 0.5  # seconds between publications of each space's sequence number
+OVERDUE = 0.02  # seconds late from which an expiry turn runs even while requests wait
+BUSY = 0.05  # seconds after a request during which expiry turns are one write each
 _READS = ("query", "log", "keys")
 
 
@@ -91,6 +93,7 @@ class StoreServer:
         self._worker: threading.Thread | None = None
         self._writer: Writer | None = None
         self._leases = Leases()
+        self._busy_until = 0.0  # monotonic time until which requests are coming in
 
     def start(self, timeout: float = 10.0) -> None:
         """Open the database, find the leader or lead, then serve.
@@ -204,12 +207,14 @@ class StoreServer:
             self._acks.release()
             if item is None:
                 return
+            if batch[0].kind != "tick":
+                self._busy_until = time.monotonic() + BUSY
+            if self._queue.empty() or self._expiry_overdue():
+                self._sweep()
 
     def _handle(self, batch: list[Request]) -> None:
         pending: list[Pending] = []
         replicas: list[Request] = []
-        if self._roles.role == "leading":
-            self._writer.expire(pending)
         for req in batch:
             if req.kind == "replica":
                 replicas.append(req)
@@ -308,7 +313,7 @@ class StoreServer:
     def _forget(self, name: str) -> None:
         """Drop a space's state from memory (its database was replaced: `_space` reloads it)."""
         self._spaces.pop(name, None)
-        gc.unfreeze()  # frozen at start (space.heap), the old state could never be freed
+        gc.unfreeze()  # frozen at start (space._heap), the old state could never be freed
 
     def _db_(self) -> StoreDB:
         assert self._db is not None
@@ -320,6 +325,29 @@ class StoreServer:
             state = self._spaces[name] = SpaceState(name, self._db_())
             state.leases = self._leases
         return state
+
+    def _sweep(self) -> None:
+        """Commit one turn of expiries on its own, between batches (writes never wait for more).
+
+        It runs when no request waits, or when expiries are late by `OVERDUE` (so a
+        steady stream of writes cannot hold them back for ever). While requests come
+        in (one within `BUSY` s), a turn is one expired write, so a write arriving
+        meanwhile waits for that one's commit at most; else about `lifespans.BUDGET`
+        triples' worth, to sweep a mass expiry fast.
+        """
+        if self._roles.role != "leading":
+            return
+        pending: list[Pending] = []
+        busy = time.monotonic() < self._busy_until
+        try:
+            self._writer.expire(pending, lifespans.BUSY if busy else lifespans.BUDGET)
+            self._writer.commit(pending)  # a failed commit: the writer refuses writes, says why
+        except Exception:  # a bug must not stop the store
+            log.exception("store failed sweeping expired writes")
+
+    def _expiry_overdue(self) -> bool:
+        due = self._leases.next_due()
+        return due is not None and due < time.time() - OVERDUE
 
     def _expiry_wait(self) -> float:
         """Return the seconds until the next lease expires (a heartbeat if none or following)."""

@@ -236,12 +236,15 @@ class Writer:
         for p in pending:
             reject(p.req, CommitFailed(f"not applied: {exc}"))
 
-    def expire(self, pending: list[Pending]) -> None:
-        """Decide the retraction of each write whose lifespan ran out (`lifespans.py`)."""
+    def expire(self, pending: list[Pending], budget: int) -> None:
+        """Decide the retraction of writes whose lifespan ran out, about `budget` in cost.
+
+        See `lifespans.py`.
+        """
         if self.failed or self._leases is None:
             return
         stamp = lambda: str(self.session.new_timestamp())  # noqa: E731
-        for state, net in retractions(self._leases, self._space, stamp, time.time()):
+        for state, net in retractions(self._leases, self._space, stamp, time.time(), budget):
             pending.append(Pending(Request("expire", state.name, None), state, net, _no_reply))
 
     def probe(self, busy: int) -> None:

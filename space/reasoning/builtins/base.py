@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
 from rdflib import BNode
@@ -38,7 +38,6 @@ class Context:
     terms: TermTable
     store: TripleStore
     printer: Callable[[str], None] = print
-    hidden: set[int] = field(default_factory=set)  # predicates `hide` keeps out of listings
 
     def fresh_bnode(self) -> int:
         """Return the id of a new blank node."""

@@ -1,9 +1,9 @@
 """Jena's backward-engine directives: `table tableAll` (no-ops here) and `hide`.
 
 `table` asks Jena's backward engine to memoize goals; forward evaluation keeps
-every conclusion anyway, so both are accepted and do nothing. `hide(p)` keeps the
-triples with predicate `p` out of what the engine lists, as Jena does; rules
-still see them.
+every conclusion anyway, so both are accepted and do nothing. `hide(n)` keeps every
+triple with `n` as subject, predicate or object out of what the engine lists and
+reports, as Jena's FBRuleInfGraph filters its answers; rules still see them.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ class TableAll(Table):
 
 
 class Hide(Builtin):
-    """Keep the triples with the given predicates out of the engine's listings."""
+    """Keep the triples that name the given nodes out of the engine's listings."""
 
     name = "hide"
     arity = (1, None)
@@ -38,7 +38,7 @@ class Hide(Builtin):
     deferred = True
 
     def run(self, ctx: Context, args: Args) -> Args | None:
-        ctx.hidden.update(a for a in args if a is not None)
+        ctx.terms.hidden.update(a for a in args if a is not None)
         return args
 
 

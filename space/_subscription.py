@@ -12,12 +12,13 @@ import logging
 import queue
 import threading
 from collections.abc import Callable
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 
 import zenoh
 from rdflib.term import Node
 
-from space.changeset import LISTS, Changeset, published_seq, unpack
+from space.changeset import Changeset, published_seq, unpack
 from space.errors import MalformedPayload, SpaceError
 from space.template import Template
 
@@ -35,12 +36,10 @@ Callback = Callable[[Change], None]
 
 
 class Subscription:
-    """One `subscribe()`: a template, a callback and the last sequence number delivered.
+    """One `subscribe()` to whole changesets: a template, a callback, the last seq delivered.
 
-    `skip_agent` (a writer's name) and `skip_subjects` (an IRI prefix) leave
-    out, before their terms are parsed, that writer's changesets and the
-    triples whose subject starts with the prefix: a process that ignores them
-    does not pay to parse them. Close it with `close()` (or `TripleSpace.unsubscribe`).
+    `skip_agent` (a writer's name) leaves out that writer's changesets before
+    their terms are parsed. Close it with `close()` (or `TripleSpace.unsubscribe`).
     """
 
     def __init__(
@@ -50,29 +49,32 @@ class Subscription:
         callback: Callback,
         *,
         skip_agent: str | None = None,
-        skip_subjects: str | None = None,
     ) -> None:
         self.template = template
         self.callback = callback
         self.skip_agent = skip_agent
-        self.skip_subjects = skip_subjects
         self.last_seq = 0
         self.ready = False
-        self.early: list[bytes] = []
+        self.early: list[object] = []
         self.initial: Change | None = None
         self._dispatcher = dispatcher
-        self._subscriber: zenoh.Subscriber | None = None
+        self._subscribers: list[zenoh.Subscriber] = []
 
     def attach(self, subscriber: zenoh.Subscriber) -> None:
-        """Take ownership of the Zenoh subscriber that feeds this subscription."""
-        self._subscriber = subscriber
+        """Take ownership of a Zenoh subscriber that feeds this subscription."""
+        self._subscribers.append(subscriber)
 
     def close(self) -> None:
         """Stop receiving changes; the callback is not called again."""
-        if self._subscriber is not None:
-            self._subscriber.undeclare()
-            self._subscriber = None
-        self._dispatcher.forget(self)
+        subscribers, self._subscribers = self._subscribers, []
+        with ExitStack() as steps:  # each runs even when another raised
+            steps.callback(self._dispatcher.forget, self)
+            for subscriber in subscribers:
+                steps.callback(subscriber.undeclare)
+
+    def item(self, sample: zenoh.Sample) -> object:
+        """Return what the Zenoh callback queues for the dispatcher thread."""
+        return sample.payload.to_bytes()
 
     def decode(self, payload: bytes) -> tuple[int, Changeset | None]:
         """Return a change's sequence number and changeset; None for a changeset skipped unparsed.
@@ -86,13 +88,57 @@ class Subscription:
         assert isinstance(wire, dict)
         if self.skip_agent is not None and wire.get("agent") == self.skip_agent:
             return seq, None
-        if self.skip_subjects is not None:
-            wire = _without_subjects(wire, f"<{self.skip_subjects}")
         return seq, Changeset.from_wire(wire)  # its seq, checked above, is read as it is
 
-    def skips(self, triple: tuple[Node, Node, Node]) -> bool:
-        """Return True for a triple this subscription leaves out (its subject has the prefix)."""
-        return self.skip_subjects is not None and str(triple[0]).startswith(self.skip_subjects)
+    def receive(self, item: object, fetch: Fetch) -> list[Change]:
+        """Return the changes to deliver for a received changeset, filling a gap before it.
+
+        Raises:
+            MalformedPayload: the payload is not a published changeset.
+        """
+        assert isinstance(item, bytes)
+        seq, cs = self.decode(item)
+        if seq <= self.last_seq:
+            return []
+        if seq == self.last_seq + 1:
+            return self._advance(seq, cs)
+        # A gap. Anyone can publish on the changes key: a seq the store's log does not
+        # hold must not move `last_seq`, or every later real change would look old.
+        # So the log, not this message, says what happened up to it.
+        changes = self.behind(seq, fetch)
+        if self.last_seq < seq:
+            log.warning(
+                "change %d is not in the store's log: skipped (delivered up to %d); "
+                "if real, the store's heartbeat brings it back",
+                seq,
+                self.last_seq,
+            )
+        return changes
+
+    def behind(self, seq: int, fetch: Fetch) -> list[Change]:
+        """Return what the store's log holds after `last_seq`, up to `seq` at most."""
+        if seq <= self.last_seq:
+            return []
+        try:
+            missed, _now = fetch(self.last_seq + 1, seq)
+        except SpaceError as exc:
+            log.warning("could not fetch changes %d..%d: %s", self.last_seq + 1, seq, exc)
+            return []
+        changes = []
+        for payload in missed:
+            try:
+                got, cs = self.decode(payload)
+            except MalformedPayload as exc:
+                log.warning("malformed logged change skipped: %s", exc)
+                continue
+            if got > self.last_seq:
+                changes += self._advance(got, cs)
+        return changes
+
+    def _advance(self, seq: int, cs: Changeset | None) -> list[Change]:
+        self.last_seq = seq
+        change = None if cs is None else self.filter(cs)
+        return [] if change is None else [change]
 
     def filter(self, cs: Changeset) -> Change | None:
         """Return the matching part of a changeset, or None if nothing matches."""
@@ -123,30 +169,9 @@ class Subscription:
         )
 
 
-def _without_subjects(wire: dict, prefix: str) -> dict:
-    """Return a changeset map without the triples whose subject's text starts with `prefix`.
-
-    Malformed entries are kept, for `Changeset.from_wire` to reject.
-    """
-    out = dict(wire)
-    for name in LISTS:
-        listed = wire.get(name)
-        if not isinstance(listed, list):
-            continue
-        kept = []
-        for triple in listed:
-            try:
-                if triple[0].startswith(prefix):
-                    continue
-            except (TypeError, IndexError, KeyError, AttributeError):
-                pass
-            kept.append(triple)
-        out[name] = kept
-    return out
-
-
-Fetch = Callable[[int, int], list[bytes]]
-_LATEST = 2**62  # "up to the store's current sequence number" in a log request
+# (first, last) -> (the logged payloads first..last still kept, the store's seq now)
+Fetch = Callable[[int, int], tuple[list[bytes], int]]
+LATEST = 2**62  # "up to the store's current sequence number" in a log request
 
 
 @dataclass(frozen=True)
@@ -161,9 +186,7 @@ class Dispatcher:
 
     def __init__(self, fetch_log: Fetch) -> None:
         self._fetch_log = fetch_log
-        self._queue: queue.SimpleQueue[tuple[Subscription, bytes | _Behind | None] | None] = (
-            queue.SimpleQueue()
-        )
+        self._queue: queue.SimpleQueue[tuple[Subscription, object] | None] = queue.SimpleQueue()
         self._subs: set[Subscription] = set()
         self._thread = threading.Thread(target=self._run, name="tspace-dispatch", daemon=True)
         self._started = False
@@ -173,7 +196,7 @@ class Dispatcher:
         """Return the Zenoh callback that feeds a subscription (it only enqueues)."""
 
         def callback(sample: zenoh.Sample) -> None:
-            self._queue.put((sub, sample.payload.to_bytes()))
+            self._queue.put((sub, sub.item(sample)))
 
         return callback
 
@@ -194,12 +217,13 @@ class Dispatcher:
         sub.initial = initial
         self._queue.put((sub, None))
 
-    def catch_up(self, seq: int = _LATEST) -> None:
+    def catch_up(self, seq: int = LATEST) -> None:
         """Make every subscription fetch what it missed up to `seq` from the store's log.
 
-        Called on a reconnection and on the store's heartbeat (its current
-        sequence number), so a change missed during a cut arrives even when no
-        later change follows it. Safe in a Zenoh callback: it only enqueues.
+        Called on a reconnection, when the leading store's token comes back, and
+        on the store's heartbeat (its current sequence number), so a change missed
+        during a cut arrives even when no later change follows it. Safe in a Zenoh
+        callback: it only enqueues.
         """
         with self._lock:
             subs = list(self._subs)
@@ -236,58 +260,21 @@ class Dispatcher:
                 for entry in early:
                     self._process(sub, entry)
             elif isinstance(payload, _Behind):
-                if sub.ready and payload.seq > sub.last_seq:
-                    self._fill_gap(sub, payload.seq)
+                if sub.ready:
+                    for change in sub.behind(payload.seq, self._fetch_log):
+                        self._call(sub, change)
             elif not sub.ready:
                 sub.early.append(payload)
             else:
                 self._process(sub, payload)
 
-    def _process(self, sub: Subscription, payload: bytes) -> None:
+    def _process(self, sub: Subscription, item: object) -> None:
         try:
-            seq, cs = sub.decode(payload)
+            changes = sub.receive(item, self._fetch_log)
         except MalformedPayload as exc:
             log.warning("malformed change skipped: %s", exc)
             return
-        if seq <= sub.last_seq:
-            return
-        if seq == sub.last_seq + 1:
-            self._deliver(sub, seq, cs)
-            return
-        # A gap. Anyone can publish on the changes key: a seq the store's log does not
-        # hold must not move `last_seq`, or every later real change would look old.
-        # So the log, not this message, says what happened up to it.
-        self._fill_gap(sub, seq)
-        if sub.last_seq < seq:
-            log.warning(
-                "change %d is not in the store's log: skipped (delivered up to %d); "
-                "if real, the store's heartbeat brings it back",
-                seq,
-                sub.last_seq,
-            )
-
-    def _fill_gap(self, sub: Subscription, last: int) -> None:
-        """Deliver what the store's log holds after `sub.last_seq`, up to `last` at most."""
-        try:
-            missed = self._fetch_log(sub.last_seq + 1, last)
-        except SpaceError as exc:
-            log.warning("could not fetch changes %d..%d: %s", sub.last_seq + 1, last, exc)
-            return
-        for payload in missed:
-            try:
-                seq, cs = sub.decode(payload)
-            except MalformedPayload as exc:
-                log.warning("malformed logged change skipped: %s", exc)
-                continue
-            if seq > sub.last_seq:
-                self._deliver(sub, seq, cs)
-
-    def _deliver(self, sub: Subscription, seq: int, cs: Changeset | None) -> None:
-        sub.last_seq = seq
-        if cs is None:
-            return
-        change = sub.filter(cs)
-        if change is not None:
+        for change in changes:
             self._call(sub, change)
 
     def _call(self, sub: Subscription, change: Change) -> None:

@@ -1,0 +1,67 @@
+"""Changesets cut by (subject, predicate): what a scoped subscriber receives.
+
+Besides each whole changeset on `@/changes`, the store publishes the part about
+each (subject, predicate) on `@/changes/<s>/<p>`, with `prev`: the seq of the
+previous changeset that had a part on that key. A subscriber that selects keys
+with key expressions (a robot's subjects, `<...%23robot7_$*>/*`) so receives
+its share of a fleet's traffic only, Zenoh filtering before Python decodes, and
+a `prev` it has not seen tells it a part went missing. The chunks are the
+terms' full N-Triples text, escaped, never compacted: a term's key must not
+change when the space learns a prefix later. See docs/wire-format.md.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from rdflib.term import Node
+
+from space.changeset import LISTS
+from space.errors import MalformedPayload
+from space.keys import escape
+from space.terms import to_nt
+
+HEADER = ("v", "id", "agent", "ts", "cause", "seq", "lifespan")  # repeated in every part
+
+Part = dict  # a changeset map: the header of its changeset, the triples of one key
+PartKey = tuple[str, str]  # (subject chunk, predicate chunk)
+
+
+def split(wire: Mapping) -> dict[PartKey, Part]:
+    """Return the parts of a changeset map by (subject chunk, predicate chunk), in first-seen order.
+
+    Raises:
+        MalformedPayload: a listed triple is not three N-Triples terms.
+    """
+    header = {name: wire[name] for name in HEADER if name in wire}
+    parts: dict[PartKey, Part] = {}
+    for name in LISTS:
+        listed = wire.get(name) or []
+        if not isinstance(listed, list):
+            raise MalformedPayload(f"'{name}' must be a list of triples")
+        for triple in listed:
+            key = chunks(triple)
+            part = parts.get(key)
+            if part is None:
+                part = parts[key] = dict(header)
+            part.setdefault(name, []).append(triple)
+    return parts
+
+
+def chunks(triple: object) -> PartKey:
+    """Return the key chunks of a wire triple's subject and predicate (their escaped text).
+
+    Raises:
+        MalformedPayload: not a list of three N-Triples terms.
+    """
+    if not isinstance(triple, list | tuple) or len(triple) != 3:
+        raise MalformedPayload(f"a triple is a list of three terms, got {triple!r:.80}")
+    s, p = triple[0], triple[1]
+    if not isinstance(s, str) or not isinstance(p, str):
+        raise MalformedPayload(f"a term is an N-Triples string, got {triple!r:.80}")
+    return escape(s), escape(p)
+
+
+def term_chunk(term: Node) -> str:
+    """Return the chunk of a term in a part key."""
+    return escape(to_nt(term))

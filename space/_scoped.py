@@ -1,0 +1,238 @@
+"""A subscription to some (subject, predicate) keys only: Zenoh filters, the chain finds gaps.
+
+It declares one Zenoh subscriber per selector on `@/changes/<s>/<p>` (see
+`space._parts`) and delivers each part it receives as a `Change`: a changeset
+with parts on several selected keys is delivered once per part, each with its
+id and seq. Per key, it remembers the seq of the last part delivered; the
+store's `prev` says which seq it should be. When `prev` names one it never saw
+(past `last_seq`, up to which it holds everything selected), it fetches the
+log since `last_seq`, keeps the selected parts not delivered yet, and only
+then delivers the part that showed the gap. A part lost with no later part on
+its key comes back when its session reconnects or the leading store's token
+comes back (a cut anywhere between them drops it): both fetch the log to now.
+The heartbeat does not (it says the space moved, not whether its keys did).
+"""
+
+from __future__ import annotations
+
+import logging
+
+import zenoh
+from rdflib import BNode, Literal, URIRef
+
+from space import keys
+from space._parts import Part, split, term_chunk
+from space._subscription import LATEST, Callback, Change, Dispatcher, Fetch, Subscription
+from space.changeset import Changeset, published_seq, unpack
+from space.errors import InputError, MalformedPayload, SpaceError
+from space.prefixes import PrefixMap
+from space.template import Template
+from space.terms import Triple
+
+log = logging.getLogger("tspace.subscription")
+
+SLACK = 1_000_000  # a live part this far past the store's last known seq is checked in the log
+
+
+class ScopedSubscription(Subscription):
+    """One `subscribe(..., scope=...)`: the parts of changes on the selected keys.
+
+    Args:
+        selectors: key expressions of `<s>/<p>`, each two chunks (`selectors()` makes
+            them from terms and IRI prefixes).
+    """
+
+    def __init__(
+        self,
+        dispatcher: Dispatcher,
+        template: Template,
+        callback: Callback,
+        *,
+        space: str,
+        selectors: list[str],
+        skip_agent: str | None = None,
+    ) -> None:
+        super().__init__(dispatcher, template, callback, skip_agent=skip_agent)
+        self.space = space
+        self.keys = [selector_key(space, s) for s in selectors]
+        self._exprs = [zenoh.KeyExpr(k) for k in self.keys]
+        self.horizon = 0  # the highest seq the store itself said it reached
+        self._last: dict[str, int] = {}  # part key -> seq of the last part delivered on it
+
+    def item(self, sample: zenoh.Sample) -> object:
+        """Queue the part with its key: the chain is per key."""
+        return str(sample.key_expr), sample.payload.to_bytes()
+
+    def selects(self, triple: Triple) -> bool:
+        """Return True for a triple whose (subject, predicate) key this subscription selects."""
+        try:
+            s, p = term_chunk(triple[0]), term_chunk(triple[1])
+        except TypeError:
+            return False
+        return self._selects(keys.part_key(self.space, s, p))
+
+    def _selects(self, key: str) -> bool:
+        try:
+            expr = zenoh.KeyExpr(key)
+        except (zenoh.ZError, ValueError):
+            return False
+        return any(e.intersects(expr) for e in self._exprs)
+
+    def start(self, seq: int) -> None:
+        """Note the store's seq the subscription starts from."""
+        self.horizon = max(self.horizon, seq)
+
+    def receive(self, item: object, fetch: Fetch) -> list[Change]:
+        """Return the changes to deliver for a received part, the missed ones first.
+
+        Raises:
+            MalformedPayload: not a published part (no id, seq or `prev`).
+        """
+        key, payload = item  # type: ignore[misc]
+        wire = unpack(payload)
+        seq = published_seq(wire)
+        assert isinstance(wire, dict)
+        prev = wire.get("prev")
+        if not isinstance(prev, int) or isinstance(prev, bool) or not 0 <= prev < seq:
+            raise MalformedPayload(f"a published part has a 'prev' below its seq, got {prev!r}")
+        known = max(self.last_seq, self._last.get(key, 0))
+        if seq <= known:
+            return []
+        changes: list[Change] = []
+        if prev > known or seq > self.horizon + SLACK:
+            try:
+                changes = self._fetch(seq - 1, fetch)
+            except SpaceError as exc:
+                log.warning("part %d on %s held back, the log is out of reach: %s", seq, key, exc)
+                return []
+            if seq > self.horizon:
+                log.warning(
+                    "part %d on %s is past the store's seq %d: skipped", seq, key, self.horizon
+                )
+                return changes
+        self._last[key] = seq
+        return changes + self._changes(wire)
+
+    def behind(self, seq: int, fetch: Fetch) -> list[Change]:
+        """Fetch the log to now on a reconnection or a new leader (`LATEST`); ignore heartbeats."""
+        if seq != LATEST:
+            return []
+        try:
+            return self._fetch(LATEST, fetch)
+        except SpaceError as exc:
+            log.warning("could not fetch changes after %d: %s", self.last_seq, exc)
+            return []
+
+    def _fetch(self, last: int, fetch: Fetch) -> list[Change]:
+        """Deliver the selected parts logged after `last_seq`, up to `last`, not delivered yet.
+
+        Raises:
+            SpaceError: the log did not answer.
+        """
+        if last <= self.last_seq:
+            return []
+        payloads, now = fetch(self.last_seq + 1, last)
+        self.horizon = max(self.horizon, now)
+        changes: list[Change] = []
+        for payload in payloads:
+            try:
+                wire = unpack(payload)
+                seq = published_seq(wire)
+                assert isinstance(wire, dict)
+                if seq <= self.last_seq:
+                    continue
+                parts = split(wire)
+            except MalformedPayload as exc:
+                log.warning("malformed logged change skipped: %s", exc)
+                continue
+            kept = self._kept(parts, seq)
+            if kept is not None:
+                changes += self._changes(kept)
+        self.last_seq = max(self.last_seq, min(last, now))
+        return changes
+
+    def _kept(self, parts: dict[tuple[str, str], Part], seq: int) -> Part | None:
+        """Return the selected parts of one logged changeset not delivered yet, merged."""
+        merged: Part | None = None
+        for (s, p), part in parts.items():
+            key = keys.part_key(self.space, s, p)
+            if seq <= self._last.get(key, 0) or not self._selects(key):
+                continue
+            self._last[key] = seq
+            if merged is None:
+                merged = {k: v for k, v in part.items() if not isinstance(v, list)}
+            for name, listed in part.items():
+                if isinstance(listed, list):
+                    merged.setdefault(name, []).extend(listed)
+        return merged
+
+    def _changes(self, wire: Part) -> list[Change]:
+        if self.skip_agent is not None and wire.get("agent") == self.skip_agent:
+            return []
+        try:
+            change = self.filter(Changeset.from_wire(wire, published=True))
+        except MalformedPayload as exc:
+            log.warning("malformed change skipped: %s", exc)
+            return []
+        return [] if change is None else [change]
+
+
+def selector_key(space: str, selector: str) -> str:
+    """Return the key expression of a selector `<s>/<p>` (two chunks, wildcards allowed).
+
+    Raises:
+        InputError: not two chunks, or not a valid key expression.
+    """
+    chunks_ = selector.split("/")
+    if len(chunks_) != 2 or "**" in chunks_:
+        raise InputError(f"scope {selector!r}: write SUBJECT/PREDICATE, each one key chunk")
+    key = keys.part_key(space, *chunks_)
+    try:
+        zenoh.KeyExpr(key)
+    except (zenoh.ZError, ValueError) as exc:
+        raise InputError(f"scope {selector!r}: not a key expression: {exc}") from exc
+    return key
+
+
+Scope = tuple[object, object]  # (subject, predicate): None, an rdflib term, or "IRI-prefix*"
+
+
+def selectors(scope: list[Scope], prefixes: PrefixMap) -> list[str]:
+    """Return the `<s>/<p>` selectors of a scope.
+
+    Each of a pair's two positions is None (any), an rdflib term (exactly it), or
+    a string ending in `*`: every IRI that starts with what comes before it (an
+    IRI, or `pfx:local` expanded with `prefixes`), e.g. `"ac:robot7_*"`.
+
+    Raises:
+        InputError: a position is none of those, or names an unknown prefix.
+    """
+    out = []
+    for pair in scope:
+        if not isinstance(pair, tuple) or len(pair) != 2:
+            raise InputError(f"scope {pair!r}: give (subject, predicate) pairs")
+        for s in _chunks(pair[0], prefixes):
+            for p in _chunks(pair[1], prefixes):
+                out.append(f"{s}/{p}")
+    return list(dict.fromkeys(out))
+
+
+def _chunks(position: object, prefixes: PrefixMap) -> list[str]:
+    if position is None:
+        return ["*"]
+    if isinstance(position, URIRef | Literal | BNode):
+        return [term_chunk(position)]
+    if isinstance(position, str):
+        if not position.endswith("*"):
+            raise InputError(f"scope {position!r}: an IRI prefix ends with '*'")
+        return [f"<{keys.escape(_iri(position[:-1], prefixes))}$*>"]
+    raise InputError(f"scope position {position!r}: None, an RDF term or 'IRI-prefix*'")
+
+
+def _iri(text: str, prefixes: PrefixMap) -> str:
+    if "://" in text or text.startswith("urn:"):
+        return text
+    iri = prefixes.expand(text)
+    if iri is None:
+        raise InputError(f"scope {text + '*'!r}: unknown prefix")
+    return str(iri)

@@ -1,0 +1,156 @@
+"""Scoped subscriptions: a robot's agent receives only its robot's part of the traffic.
+
+Against a real router and store: Zenoh filters the parts by key, and the chain of
+`prev` seqs still finds what a subscriber missed, from the store's log.
+"""
+
+import logging
+
+import pytest
+import zenoh
+from rdflib import Literal, Namespace
+from rdflib.namespace import RDF
+
+from conftest import AC_NS, wait_for
+from space import InputError, TripleSpace, escape_key_chunk, make_config
+from space.changeset import pack
+
+AC = Namespace(AC_NS)
+SCOPE = [(AC.robot1, None), ("ac:robot1_*", None)]
+
+
+def level(robot: int, value: str) -> tuple:
+    return (AC[f"robot{robot}_battery"], AC.battery_level, Literal(value))
+
+
+def test_a_scoped_subscriber_receives_only_its_robots_parts(ts):
+    ts.write([(AC.robot1, RDF.type, AC.Robot)])
+    seen = []
+    ts.subscribe(None, seen.append, scope=SCOPE)
+    ts.write([level(2, "low")])  # robot2's only: not even received
+    ts.write([level(12, "low")])  # robot12 starts with "robot1": not robot1's either
+    mixed = ts.write([level(2, "full"), level(1, "low")])
+    ts.write([(AC.robot1, AC.location, AC.hall)])
+    wait_for(lambda: len(seen) >= 2, what="robot1's two parts")
+    assert [c.added for c in seen] == [[level(1, "low")], [(AC.robot1, AC.location, AC.hall)]]
+    assert seen[0].id == mixed and seen[0].seq == mixed.seq  # the part of the mixed changeset
+
+
+def test_a_scoped_snapshot_holds_only_the_scope(ts):
+    ts.write([level(1, "normal"), level(2, "low"), (AC.robot1, RDF.type, AC.Robot)])
+    seen = []
+    ts.subscribe(None, seen.append, snapshot=True, scope=SCOPE)
+    ts.write([level(1, "low")])
+    wait_for(lambda: len(seen) >= 2, what="snapshot and change")
+    assert set(seen[0].added) == {level(1, "normal"), (AC.robot1, RDF.type, AC.Robot)}
+    assert seen[1].added == [level(1, "low")]
+
+
+def test_a_template_and_a_scope_both_filter(ts):
+    seen = []
+    ts.subscribe((None, AC.battery_level, None), seen.append, scope=[(None, AC.battery_level)])
+    ts.write([level(1, "low"), (AC.robot1, AC.location, AC.hall)])
+    ts.write([level(3, "full")])
+    wait_for(lambda: len(seen) >= 2, what="two battery levels")
+    assert [c.added for c in seen] == [[level(1, "low")], [level(3, "full")]]
+    assert seen[0].bindings == []  # a template without variables binds nothing
+
+
+def _cut(ts, sub):
+    """Lose every part sent to `sub` until `_mend` (as a link cut does)."""
+    for subscriber in sub._subscribers:
+        subscriber.undeclare()
+    sub._subscribers = []
+
+
+def _mend(ts, sub):
+    for key in sub.keys:
+        sub.attach(ts.session.declare_subscriber(key, ts._dispatcher.feed(sub)))
+
+
+def test_a_missed_part_is_fetched_from_the_log_before_the_next_one(ts):
+    seen = []
+    sub = ts.subscribe(None, seen.append, scope=SCOPE)
+    ts.write([level(1, "normal")])
+    wait_for(lambda: seen, what="the first part")
+    _cut(ts, sub)
+    ts.write([level(1, "low"), level(2, "low")])  # lost
+    ts.write([level(2, "full")])  # not robot1's
+    _mend(ts, sub)
+    ts.write([level(1, "very low")])  # its prev names the lost one
+    wait_for(lambda: len(seen) >= 3, what="the lost part, then the new one")
+    assert [c.added for c in seen] == [
+        [level(1, "normal")],
+        [level(1, "low")],  # from the log, robot2's triple left out
+        [level(1, "very low")],
+    ]
+    assert seen[1].seq < seen[2].seq
+
+
+def test_a_lost_last_part_comes_back_when_the_link_does(ts):
+    seen = []
+    sub = ts.subscribe(None, seen.append, scope=SCOPE)
+    _cut(ts, sub)
+    ts.write([level(1, "low")])  # lost, and nothing follows it on robot1's keys
+    _mend(ts, sub)
+    ts.write([level(2, "low")])
+    ts._dispatcher.catch_up()  # what a reconnection or the leader's token coming back does
+    wait_for(lambda: seen, what="the lost part")
+    assert [c.added for c in seen] == [[level(1, "low")]]
+
+
+def test_a_forged_or_malformed_part_is_skipped_and_delivery_goes_on(server, ts, caplog):
+    seen = []
+    ts.subscribe(None, seen.append, scope=SCOPE)
+    s, p = (escape_key_chunk(f"<{AC_NS}{name}>") for name in ("robot1_battery", "battery_level"))
+    key = f"tspace/{ts.space}/@/changes/{s}/{p}"
+    forged = {"id": "x", "seq": 10**9, "prev": 0, "add": [[f"<{AC_NS}robot1_battery>"] * 3]}
+    with caplog.at_level(logging.WARNING, logger="tspace.subscription"):
+        with zenoh.open(make_config(mode="client", connect=[server.endpoint])) as plain:
+            plain.put(key, pack(forged))
+            plain.put(key, b"\xc1 not msgpack")
+        ts.write([level(1, "low")])
+        wait_for(lambda: seen, what="the real part")
+    assert [c.added for c in seen] == [[level(1, "low")]]
+    assert "past the store's seq" in caplog.text
+    assert "malformed change skipped" in caplog.text
+
+
+@pytest.mark.parametrize(
+    ("scope", "message"),
+    [
+        ([("ac:robot1_", None)], "ends with"),
+        ([("zz:robot1_*", None)], "unknown prefix"),
+        ([AC.robot1], "pairs"),
+        ([(42, None)], "None, an RDF term"),
+    ],
+)
+def test_a_malformed_scope_is_refused_with_what_is_wrong(ts, scope, message):
+    with pytest.raises(InputError, match=message):
+        ts.subscribe(None, lambda change: None, scope=scope)
+
+
+def test_a_part_key_does_not_change_when_the_space_learns_a_prefix(server, space_name):
+    ns = AC_NS + "robot1_"
+    with TripleSpace.open(server.endpoint, space=space_name, prefixes={"ac": AC_NS}) as ts:
+        ts.write([(AC.robot1, RDF.type, AC.Robot)])
+        with TripleSpace.open(server.endpoint, space=space_name, prefixes={"r1": ns}) as other:
+            other.write(
+                [(AC.robot1_base, RDF.type, AC.MobileBase)]
+            )  # r1:base in triple keys
+        seen = []
+        ts.subscribe(None, seen.append, scope=SCOPE)
+        ts.write([(AC.robot1_base, AC.motion_speed, Literal("low"))])
+        wait_for(lambda: seen, what="the part keyed with the longer namespace")
+        assert seen[0].added == [(AC.robot1_base, AC.motion_speed, Literal("low"))]
+
+
+def test_a_scoped_subscription_may_start_from_the_whole_state(ts):
+    ts.write([level(1, "normal"), level(2, "low")])
+    seen = []
+    ts.subscribe(None, seen.append, snapshot="all", scope=SCOPE)
+    ts.write([level(2, "full")])
+    ts.write([level(1, "low")])
+    wait_for(lambda: len(seen) >= 2, what="snapshot and robot1's change")
+    assert set(seen[0].added) == {level(1, "normal"), level(2, "low")}
+    assert [c.added for c in seen[1:]] == [[level(1, "low")]]
