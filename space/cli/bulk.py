@@ -22,11 +22,11 @@ from pathlib import Path
 
 import pyoxigraph as ox
 
+from space._request import Pending
 from space.ack import Ack
 from space.cli.write import CHUNK
 from space.client import TripleSpace
 from space.errors import InputError
-from space._request import Pending
 
 WINDOW = 4  # changesets in flight
 MAX_PREFIXES = 256  # the store's limit for one changeset
