@@ -100,14 +100,13 @@ def listen(endpoint: str) -> None:
 def zenoh_hop(count: int) -> tuple[float, float]:
     """Return p50, p99 (ms) from a GET to the subscriber process receiving the put."""
     endpoint = f"tcp/127.0.0.1:{free_port()}"
-    children = [
-        subprocess.Popen(
-            [sys.executable, __file__, role, endpoint], stdout=subprocess.PIPE, text=True
-        )
-        for role in ("serve", "listen")
-    ]
+    children: list[subprocess.Popen] = []
     try:
-        for child in children:
+        for role in ("serve", "listen"):  # the router first: the listener connects to it
+            child = subprocess.Popen(
+                [sys.executable, __file__, role, endpoint], stdout=subprocess.PIPE, text=True
+            )
+            children.append(child)
             assert child.stdout is not None and child.stdout.readline().strip() == "ready"
         with zenoh.open(_config("client", endpoint)) as session:
             time.sleep(0.5)  # the subscriber's interest reaches the router
@@ -119,7 +118,11 @@ def zenoh_hop(count: int) -> tuple[float, float]:
         return percentile(delays, 50), percentile(delays, 99)
     finally:
         for child in children:
-            child.wait(timeout=10)
+            try:
+                child.wait(timeout=10)
+            except subprocess.TimeoutExpired:  # a failed run: do not leave it behind
+                child.kill()
+                child.wait()
 
 
 def main() -> None:
