@@ -235,6 +235,12 @@ class Agent:
         if not self.started:
             self.started = True
             self.log.info("view rebuilt from the space: %d triples", len(self.view))
+            if self.shared is not None and (strays := self.view.strays(self.robot)):
+                self.log.warning(
+                    "not named after %s, so their changes never reach this agent: %s",
+                    local_name(self.robot),
+                    ", ".join(local_name(s) for s in strays),  # type: ignore[arg-type]
+                )
             self._guarded(self.on_start, "start")
             while self._early:
                 self._guarded(self._early.pop(0), "work")

@@ -31,6 +31,8 @@ class Behavior(Agent):
     """Run the task automaton of a robot: targets, power cycle and task durations."""
 
     kind = "behavior"
+    # Besides its robot: who waits for a task it postponed, in which room, and the task types.
+    shared = (AC.postponed_by, AC.waiting_for, AC.room, AC.type)
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)

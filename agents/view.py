@@ -33,6 +33,15 @@ class View(SpaceMirror):
         stems = tuple(f"{r}_" for r in others)
         return [t for t in triples if t[0] not in others and not str(t[0]).startswith(stems)]
 
+    def strays(self, robot: URIRef) -> list[Node]:
+        """Return the robot's devices and skills not named after it (`ac:robot7_...`).
+
+        A robot's agent hears only of the subjects named after its robot: it would
+        never see these change.
+        """
+        parts = {*self.objects(robot, AC.has_device), *self.objects(robot, AC.has_skill)}
+        return sorted(p for p in parts if not str(p).startswith(f"{robot}_"))
+
     def devices(self, robot: URIRef, cls: Node) -> list[URIRef]:
         """Return the robot's devices of class `cls`."""
         return [

@@ -1,10 +1,11 @@
 """A subscription to some (subject, predicate) keys only: Zenoh filters, the chain finds gaps.
 
 It declares one Zenoh subscriber per selector on `@/changes/<s>/<p>` (see
-`space._parts`) and delivers each part it receives as a `Change`: a changeset
-with parts on several selected keys is delivered once per part, each with its
-id and seq. Per key, it remembers the seq of the last part delivered; the
-store's `prev` says which seq it should be. When `prev` names one it never saw
+`space._parts`) and delivers the parts it receives as `Change`s: the parts of
+one changeset that arrive together (the store publishes them in one burst) as
+one, a part that comes late as another with the same id and seq. Per key, it
+remembers the seq of the last part delivered; the store's `prev` says which
+seq it should be. When `prev` names one it never saw
 (past `last_seq`, up to which it holds everything selected), it fetches the
 log since `last_seq`, keeps the selected parts not delivered yet, and only
 then delivers the part that showed the gap. A part lost with no later part on
@@ -41,6 +42,8 @@ class ScopedSubscription(Subscription):
         selectors: key expressions of `<s>/<p>`, each two chunks (`selectors()` makes
             them from terms and IRI prefixes).
     """
+
+    merges = True
 
     def __init__(
         self,

@@ -42,6 +42,8 @@ class Subscription:
     their terms are parsed. Close it with `close()` (or `TripleSpace.unsubscribe`).
     """
 
+    merges = False  # whether changes with one seq may arrive apart (parts), to merge
+
     def __init__(
         self,
         dispatcher: Dispatcher,
@@ -172,6 +174,7 @@ class Subscription:
 # (first, last) -> (the logged payloads first..last still kept, the store's seq now)
 Fetch = Callable[[int, int], tuple[list[bytes], int]]
 LATEST = 2**62  # "up to the store's current sequence number" in a log request
+_BATCH = 1000  # queued items handled before their changes are delivered
 
 
 @dataclass(frozen=True)
@@ -245,40 +248,76 @@ class Dispatcher:
                 self._thread.join(timeout=5)
 
     def _run(self) -> None:
-        while (item := self._queue.get()) is not None:
-            sub, payload = item
-            with self._lock:
-                alive = sub in self._subs
-            if not alive:
-                continue
-            if payload is None:
-                sub.ready = True
-                if sub.initial is not None:
-                    self._call(sub, sub.initial)
-                    sub.initial = None
-                early, sub.early = sub.early, []
-                for entry in early:
-                    self._process(sub, entry)
-            elif isinstance(payload, _Behind):
-                if sub.ready:
-                    for change in sub.behind(payload.seq, self._fetch_log):
-                        self._call(sub, change)
-            elif not sub.ready:
-                sub.early.append(payload)
-            else:
-                self._process(sub, payload)
+        out: list[tuple[Subscription, Change]] = []
+        while True:
+            batch = [self._queue.get()]
+            while len(batch) < _BATCH:  # what is queued already is handled, then delivered
+                try:
+                    batch.append(self._queue.get_nowait())
+                except queue.Empty:
+                    break
+            for item in batch:
+                if item is None:
+                    self._deliver(out)
+                    return
+                self._step(*item, out)
+            self._deliver(out)
 
-    def _process(self, sub: Subscription, item: object) -> None:
+    def _step(self, sub: Subscription, payload: object, out: list) -> None:
+        with self._lock:
+            alive = sub in self._subs
+        if not alive:
+            return
+        if payload is None:
+            sub.ready = True
+            if sub.initial is not None:
+                out.append((sub, sub.initial))
+                sub.initial = None
+            early, sub.early = sub.early, []
+            for entry in early:
+                self._process(sub, entry, out)
+        elif isinstance(payload, _Behind):
+            if sub.ready:
+                self._add(out, sub, sub.behind(payload.seq, self._fetch_log))
+        elif not sub.ready:
+            sub.early.append(payload)
+        else:
+            self._process(sub, payload, out)
+
+    def _process(self, sub: Subscription, item: object, out: list) -> None:
         try:
             changes = sub.receive(item, self._fetch_log)
         except MalformedPayload as exc:
             log.warning("malformed change skipped: %s", exc)
             return
-        for change in changes:
-            self._call(sub, change)
+        self._add(out, sub, changes)
 
-    def _call(self, sub: Subscription, change: Change) -> None:
-        try:
-            sub.callback(change)
-        except Exception:  # a user's callback must not stop delivery to the others
-            log.exception("subscription callback failed on change %s", change.id)
+    @staticmethod
+    def _add(out: list[tuple[Subscription, Change]], sub: Subscription, changes: list) -> None:
+        """Queue changes for delivery; parts of one changeset arriving together become one."""
+        for change in changes:
+            if out and out[-1][0] is sub and sub.merges and _same(out[-1][1], change):
+                last = out[-1][1]
+                last.added += change.added
+                last.removed += change.removed
+                last.inferred_added += change.inferred_added
+                last.inferred_removed += change.inferred_removed
+                last.bindings += change.bindings
+            else:
+                out.append((sub, change))
+
+    def _deliver(self, out: list[tuple[Subscription, Change]]) -> None:
+        for sub, change in out:
+            with self._lock:
+                alive = sub in self._subs
+            if not alive:
+                continue
+            try:
+                sub.callback(change)
+            except Exception:  # a user's callback must not stop delivery to the others
+                log.exception("subscription callback failed on change %s", change.id)
+        out.clear()
+
+
+def _same(a: Change, b: Change) -> bool:
+    return a.seq == b.seq and a.id == b.id

@@ -518,9 +518,10 @@ class TripleSpace:
         `scope`, (subject, predicate) pairs (each None, a term, or `"IRI-prefix*"`:
         `[(AC.robot7, None), ("ac:robot7_*", None)]`), asks only for the triples
         of those subjects and predicates: the router sends nothing else, so a
-        robot's agent does not even receive the rest of a fleet's traffic. The
-        callback is then called once per (subject, predicate) part of a changeset
-        (each with the changeset's id and seq), in store order per part; see
+        robot's agent does not even receive the rest of a fleet's traffic. A
+        changeset then comes in parts, by subject and predicate: those that arrive
+        together are delivered as one change, a late one as another with the same
+        id and seq; parts of one key come in store order, with no gap. See
         docs/wire-format.md. Its snapshot holds the scope's state, or, with
         `snapshot="all"`, everything matching `template` (the knowledge a robot's
         agent reads once, whose changes do not concern it).

@@ -31,3 +31,14 @@ def test_a_robots_agent_keeps_neither_records_nor_other_robots_of_a_snapshot():
     others = [(AC.robot12, RDF.type, AC.Robot), (AC.robot12_battery, AC.charge_percent, Literal(9))]
     view = View(View.concerning([*record, *mine, *site, *others], AC.robot1))
     assert set(view.graph) == {*mine, *site}  # robot12 starts with "robot1": another robot still
+
+
+def test_a_robots_devices_not_named_after_it_are_told():
+    view = View(
+        [
+            (AC.robot1, AC.has_device, AC.robot1_battery),
+            (AC.robot1, AC.has_device, AC.spare_laser),
+            (AC.robot1, AC.has_skill, AC.robot1_navigation),
+        ]
+    )
+    assert view.strays(AC.robot1) == [AC.spare_laser]

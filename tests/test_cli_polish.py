@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 
 import pytest
@@ -94,10 +95,22 @@ def test_a_big_document_says_how_far_it_is(lone_server, tmp_path):
     lines = out.stderr.splitlines()
     assert lines[0] == f"tspace write: reading {big} ({size:.1f} MB)…", lines
     assert lines[1].startswith("tspace write: 10000 triples read in "), lines
-    assert lines[2:] == [
-        "tspace write: sending one changeset of 10000 triples…",
-        "tspace write: written",
-    ]
+    assert lines[2] == "tspace write: sending one changeset of 10000 triples…", lines
+    assert re.fullmatch(r"tspace write: written in \d+\.\d s", lines[3]), lines
+    assert len(lines) == 4, lines
+
+
+def test_many_triples_in_a_small_document_say_how_far_the_write_is(lone_server, tmp_path):
+    many = tmp_path / "many.ttl"
+    many.write_text("".join(f"<urn:s{i}> <urn:p> <urn:o> .\n" for i in range(10_000)))
+    assert many.stat().st_size < 1e6  # read at once; the store's part takes the time
+    out = tspace(
+        "write", str(many), "--connect", lone_server.endpoint, "--space", "many", "--timeout", "30"
+    )
+    assert out.returncode == 0, out.stderr
+    lines = out.stderr.splitlines()
+    assert lines[0] == "tspace write: sending one changeset of 10000 triples…", lines
+    assert re.fullmatch(r"tspace write: written in \d+\.\d s", lines[1]), lines
 
 
 def test_version_and_every_commands_help():

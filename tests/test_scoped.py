@@ -5,13 +5,14 @@ Against a real router and store: Zenoh filters the parts by key, and the chain o
 """
 
 import logging
+import signal
 
 import pytest
 import zenoh
 from rdflib import Literal, Namespace
 from rdflib.namespace import RDF
 
-from conftest import AC_NS, wait_for
+from conftest import AC_NS, Server, wait_for
 from space import InputError, TripleSpace, escape_key_chunk, make_config
 from space.changeset import pack
 
@@ -135,9 +136,7 @@ def test_a_part_key_does_not_change_when_the_space_learns_a_prefix(server, space
     with TripleSpace.open(server.endpoint, space=space_name, prefixes={"ac": AC_NS}) as ts:
         ts.write([(AC.robot1, RDF.type, AC.Robot)])
         with TripleSpace.open(server.endpoint, space=space_name, prefixes={"r1": ns}) as other:
-            other.write(
-                [(AC.robot1_base, RDF.type, AC.MobileBase)]
-            )  # r1:base in triple keys
+            other.write([(AC.robot1_base, RDF.type, AC.MobileBase)])  # r1:base in triple keys
         seen = []
         ts.subscribe(None, seen.append, scope=SCOPE)
         ts.write([(AC.robot1_base, AC.motion_speed, Literal("low"))])
@@ -154,3 +153,87 @@ def test_a_scoped_subscription_may_start_from_the_whole_state(ts):
     wait_for(lambda: len(seen) >= 2, what="snapshot and robot1's change")
     assert set(seen[0].added) == {level(1, "normal"), level(2, "low")}
     assert [c.added for c in seen[1:]] == [[level(1, "low")]]
+
+
+def test_parts_missed_while_the_subscribers_router_was_down_come_back(tmp_path):
+    store = Server(tmp_path / "data")
+    store.start()
+    edge = Server(tmp_path / "unused", "--no-store", "--connect", store.endpoint)
+    edge.start()
+    try:
+        seen = []
+        with (
+            TripleSpace.open(edge.endpoint, space="gap", prefixes={"ac": AC_NS}) as sub_side,
+            TripleSpace.open(store.endpoint, space="gap") as writer,
+        ):
+            sub_side.subscribe(None, seen.append, scope=SCOPE)
+            writer.write([level(1, "normal")])
+            wait_for(lambda: seen, 10, "the first part")
+            edge.stop(signal.SIGKILL)
+            for value in ("low", "very low"):
+                writer.write([level(1, value), level(2, value)])
+            edge.start()
+            # on reconnecting, the subscription fetches what was written meanwhile
+            wait_for(lambda: len(seen) >= 3, 20, "the parts written while the router was down")
+            writer.write([level(1, "full")])
+            wait_for(lambda: len(seen) >= 4, 10, "every part")
+        assert [c.added for c in seen] == [
+            [level(1, v)] for v in ("normal", "low", "very low", "full")
+        ]
+    finally:
+        edge.stop()
+        store.stop()
+
+
+def test_parts_go_on_after_the_store_restarts(tmp_path):
+    store = Server(tmp_path / "data")
+    store.start()
+    edge = Server(tmp_path / "unused", "--no-store", "--connect", store.endpoint)
+    edge.start()
+    try:
+        seen = []
+        with TripleSpace.open(edge.endpoint, space="again", prefixes={"ac": AC_NS}) as sub_side:
+            sub_side.subscribe(None, seen.append, scope=SCOPE)
+            with TripleSpace.open(store.endpoint, space="again") as writer:
+                writer.write([level(1, "normal")])
+            wait_for(lambda: seen, 10, "the first part")
+            store.stop(signal.SIGKILL)
+            store.start()  # knows no key's last part: its first parts name its floor
+            with TripleSpace.open(store.endpoint, space="again") as writer:
+                writer.write([level(2, "low")])
+                writer.write([level(1, "low")])
+            wait_for(lambda: len(seen) >= 2, 20, "the part after the restart")
+        assert [c.added for c in seen] == [[level(1, "normal")], [level(1, "low")]]
+        assert [c.seq for c in seen] == [1, 3]
+    finally:
+        edge.stop()
+        store.stop()
+
+
+def test_a_changeset_on_several_selected_keys_arrives_whole_with_one_id_and_seq(ts):
+    seen = []
+    ts.subscribe(None, seen.append, scope=SCOPE)
+    triples = [level(1, "low"), (AC.robot1, AC.location, AC.hall), level(2, "low")]
+    written = ts.write(triples)
+    wait_for(lambda: sum(len(c.added) for c in seen) >= 2, what="both of robot1's parts")
+    assert {(c.id, c.seq) for c in seen} == {(written, written.seq)}
+    assert sorted(t for c in seen for t in c.added) == sorted(triples[:2])
+
+
+def test_a_robots_hw_monitor_hears_its_robot_and_the_site_not_the_fleet_nor_records(ts):
+    from agents.base import robot_scope
+    from agents.firings import FiringLog
+    from agents.hw_monitor import HwMonitor
+
+    seen = []
+    ts.subscribe(None, seen.append, scope=robot_scope(AC.robot1, HwMonitor.shared))
+    record, _dropped = FiringLog().record("some_rule", "cause-1", AC.robot1)
+    ts.write(record)  # the reasoner's record about robot1: not for its agents
+    ts.write([level(2, "low"), (AC.robot2, AC.location, AC.hall)])  # another robot's
+    ts.write([(AC.hall, AC.crowd_level, Literal("high"))])  # the site: its lasers see it
+    ts.write([level(1, "low")])
+    wait_for(lambda: len(seen) >= 2, what="the site's and robot1's changes")
+    assert [c.added for c in seen] == [
+        [(AC.hall, AC.crowd_level, Literal("high"))],
+        [level(1, "low")],
+    ]

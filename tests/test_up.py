@@ -12,9 +12,11 @@ from pathlib import Path
 
 import pytest
 from hmipage import hmi_post
+from rdflib import RDF, RDFS, Literal, URIRef
 from uprun import Up, alive
 
 from conftest import REPO, free_port, tspace_cmd, wait_for
+from space import TripleSpace
 
 LAUNCH = """
 space = "ward"
@@ -109,6 +111,33 @@ def test_a_killed_up_takes_its_processes_with_it(tmp_path, launch):
         up.proc.kill()
         up.proc.wait()
         wait_for(lambda: not any(alive(p) for p in processes), 10, "the orphans to die")
+
+
+def test_up_resumes_the_space_and_fresh_starts_it_over(tmp_path, launch):
+    robot = URIRef("https://w3id.org/tspace/selfconfig#robot1")
+    note = (robot, RDFS.comment, Literal("left by the last run"))  # in no launch file
+
+    def holds(up: Up, triple: tuple) -> bool:
+        with TripleSpace.open(f"tcp/127.0.0.1:{up.port}", space="ward") as ts:
+            return triple in ts.query(triple)
+
+    with Up(tmp_path, launch) as up:
+        up.wait_started()
+        with TripleSpace.open(f"tcp/127.0.0.1:{up.port}", space="ward") as ts:
+            ts.write([note])
+        up.proc.send_signal(signal.SIGINT)
+        assert up.proc.wait(timeout=15) == 0, up.logs()
+    with Up(tmp_path, launch) as up:  # the same data folder: the space is kept
+        up.wait_started()
+        assert up.stderr_has("resuming from them (--fresh starts over)"), up.logs()
+        assert holds(up, note)
+        up.proc.send_signal(signal.SIGINT)
+        assert up.proc.wait(timeout=15) == 0, up.logs()
+    with Up(tmp_path, launch, "--fresh") as up:
+        up.wait_started()
+        assert up.stderr_has("started afresh"), up.logs()
+        assert not holds(up, note)
+        assert holds(up, (robot, RDF.type, URIRef("https://w3id.org/tspace/selfconfig#Robot")))
 
 
 def test_a_broken_launch_file_is_reported_in_one_line(tmp_path):

@@ -236,7 +236,10 @@ class Deployment:
             ts.apply(removed=asserted, inferred_removed=inferred, timeout=60.0)
             self.view.event(f"space {self.launch.space}: started afresh ({held} triples removed)")
         elif held:
-            self.view.event(f"space {self.launch.space} holds {held} triples; resuming from them")
+            self.view.event(
+                f"space {self.launch.space} holds {held} triples; resuming from them "
+                "(--fresh starts over)"
+            )
             return
         if not self.launch.load:
             return

@@ -19,7 +19,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="run the store and every agent of a launch file, with a live view",
         description=(
             "Start `tspace serve` and every agent of the launch file as separate processes, "
-            "restart those that crash, show the robots live, stop everything on Ctrl-C."
+            "restart those that crash, show the robots live, stop everything on Ctrl-C. "
+            "A space that holds something is resumed where it was; `tspace up --fresh` is the "
+            "reset: it empties the space (in one changeset, before any agent starts) and "
+            "loads the launch file's state."
         ),
     )
     p.add_argument(
@@ -35,7 +38,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         help=f"endpoint the store's router listens on (repeatable; default {DEFAULT_ENDPOINT})",
     )
     p.add_argument(
-        "--data", metavar="DIR", type=Path, help="where the store persists (default: user data dir)"
+        "--data",
+        metavar="DIR",
+        type=Path,
+        help="where the store persists (default $XDG_DATA_HOME/tspace, else ~/.local/share/tspace)",
     )
     p.add_argument(
         "--hmi-port", type=int, metavar="PORT", help="HTTP port of the HMI (overrides the file)"
@@ -49,8 +55,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--fresh",
         action="store_true",
-        help="start the space from the launch file's state (default: resume where it was; "
-        "a --scenario always starts afresh)",
+        help="start over: empty the space and load the launch file's state (default: resume "
+        "where it was; a --scenario always starts afresh)",
     )
     p.add_argument(
         "--raw-firings",

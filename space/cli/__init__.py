@@ -29,6 +29,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tspace",
         description="A distributed triple space on Eclipse Zenoh for self-configuring robots.",
+        epilog="Start a robot: tspace up. Start it over from its launch file's state: "
+        "tspace up --fresh. Help on a command: tspace COMMAND --help.",
     )
     parser.add_argument(
         "-v", "--verbose", action="count", default=0, help="more log output (-vv for debug)"

@@ -24,22 +24,30 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run_check(args: argparse.Namespace) -> int:
-    """Print each file's rules, or its error on stderr; return 1 if any file has an error."""
-    from space.reasoning import RuleError, build_engine, default_registry, load_rules
+    """Print each file's rules, or every error in it on stderr; return 1 if any file has one.
+
+    Each error is one line, `file:line:column: ...`; after an error the checker reads on
+    from the end of the broken rule, so one run lists them all.
+    """
+    from space.reasoning import RuleError, build_engine, default_registry
+    from space.reasoning.parser import check_rules
     from space.reasoning.rules import Call
 
     registry = default_registry()
-    failed = 0
+    errors = failed = 0
     for path in args.files:
-        try:
-            rules = load_rules([path], registry, warn=_warn)
-            build_engine(rules, owl=False, registry=registry)  # what only compiling finds
-        except RuleError as exc:
-            print(exc, file=sys.stderr)
-            failed += 1
-            continue
-        if not rules:  # an empty file (or one of comments) is a mistake, not a rule base
-            print(f"{path}: no rules in it", file=sys.stderr)
+        rules, found = check_rules([path], registry, warn=_warn)
+        if not found and not rules:  # an empty file (or one of comments) is a mistake
+            found = [f"{path}: no rules in it"]
+        elif not found:
+            try:
+                build_engine(rules, owl=False, registry=registry)  # what only compiling finds
+            except RuleError as exc:
+                found = [exc]
+        for error in found:
+            print(error, file=sys.stderr)
+        if found:
+            errors += len(found)
             failed += 1
             continue
         print(f"{path}: {len(rules)} rule{'' if len(rules) == 1 else 's'}")
@@ -48,6 +56,11 @@ def run_check(args: argparse.Namespace) -> int:
             kind = "production" if any(not c.builtin.monotonic for c in calls) else "monotonic"
             kind = f"backward, {kind}" if rule.backward else kind
             print(f"  {rule.where}  {rule.label}  ({kind})")
+    if errors > 1:
+        print(
+            f"tspace rules: {errors} errors in {failed} file{'s' if failed > 1 else ''}",
+            file=sys.stderr,
+        )
     return 1 if failed else 0
 
 

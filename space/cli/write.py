@@ -19,6 +19,7 @@ if TYPE_CHECKING:
 
 ORDER = 30
 PROGRESS_BYTES = 1_000_000  # documents from this size on are streamed, with progress lines
+PROGRESS_TRIPLES = 10_000  # changesets from this size on: the store takes seconds; say so
 CHUNK = 10_000  # triples per changeset of a streamed document (bulk.py)
 
 
@@ -34,7 +35,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "A document with no triples is an error (nothing is written). A document of 1 MB and "
         "more (without --remove) is checked whole, then sent as changesets of "
         f"{CHUNK:,} triples, several in flight, with progress lines on stderr, and one id per "
-        "changeset on stdout: each changeset is applied whole, the document is not (--atomic).",
+        "changeset on stdout: each changeset is applied whole, the document is not (--atomic). "
+        "One changeset of 10,000 triples and more gets progress lines too.",
     )
     p.add_argument("file", nargs="?", metavar="FILE|-", help="Turtle document to add")
     p.add_argument("--remove", metavar="FILE|-", help="Turtle document whose triples to remove")
@@ -88,13 +90,17 @@ def run(args: argparse.Namespace) -> int:
             removed if removed is not None else (),
             lifespan=args.lifespan or 0,
         )
-        big = any(_size(source) >= PROGRESS_BYTES for source in (args.file, args.remove))
+        count = len(cs.added) + len(cs.removed)
+        big = count >= PROGRESS_TRIPLES or any(
+            _size(source) >= PROGRESS_BYTES for source in (args.file, args.remove)
+        )
+        started = time.monotonic()
         if big:
-            _say(f"sending one changeset of {len(cs.added) + len(cs.removed)} triples…")
+            _say(f"sending one changeset of {count} triples…")
         ack = ts.send(cs, timeout=args.timeout, strict=False)
         print(ack, file=sys.stdout)
         if big:
-            _say("written")
+            _say(f"written in {time.monotonic() - started:.1f} s")
     for dropped in ack.dropped:
         s, p, o = (term.n3() for term in dropped.triple)
         print(f"tspace: not applied: {s} {p} {o} .: {dropped.reason}", file=sys.stderr)

@@ -11,7 +11,8 @@ IRI, as Jena takes `foo` or `http://x#y`). `@prefix` lines apply to the whole
 file; Jena's own prefixes (rdf, rdfs, owl, xsd, rb, jr, eg, drdfs) are known.
 Included files come first, as in Jena. Beyond Jena: `'x'@en` written without a
 gap is a language-tagged string, and an included file also sees the includer's
-prefixes and is found relative to it.
+prefixes and is found relative to it; and after an error the reader skips to the end
+of the broken rule and reads on, so that every error of every file is found in one run.
 """
 
 from __future__ import annotations
@@ -25,9 +26,11 @@ from rdflib import BNode, Literal, URIRef
 
 from space.reasoning.builtins import Registry
 from space.reasoning.checks import check_rule, located, mark_shared_names
+from space.reasoning.directives import ignored_text, prefix_line, uri_argument
 from space.reasoning.errors import RuleError, RuleSyntaxError, unreadable
 from space.reasoning.forms import blank_head_variables, flatten, regex_groups
 from space.reasoning.listmaps import expand_list_maps
+from space.reasoning.recovery import Resume, resume_after
 from space.reasoning.rules import Call, Functor, Item, Location, Pattern, Rule, Term, Var
 from space.reasoning.rulesets import is_builtin_ruleset, read_builtin_ruleset
 from space.reasoning.tokens import Directive, Kind, Token, lex
@@ -49,6 +52,7 @@ log = logging.getLogger(__name__)
 # A word with one of these before its colon is a full IRI when no prefix of that name is known.
 _SCHEMES = ("http", "https", "urn", "file", "ftp", "mailto")
 _DATATYPE_SCHEMES = ("http", "urn", "ftp", "mailto")
+_AT_END = "unexpected end of file"
 _LANGUAGE = re.compile(r"@[A-Za-z]{1,8}(-[A-Za-z0-9]{1,8})*")
 
 
@@ -71,7 +75,10 @@ def parse_rules(
             or a builtin input nothing binds.
     """
     warn = warn or log.warning
-    rules = _Reader(registry, (), warn).read(text, source, dict(prefixes or DEFAULT_PREFIXES))
+    reader = _Reader(registry, (), warn, [])
+    rules = list(reader.read(text, source, dict(prefixes or DEFAULT_PREFIXES)))
+    if reader.errors:
+        raise _first(reader.errors)
     return mark_shared_names(rules, warn)
 
 
@@ -84,22 +91,69 @@ def load_rules(
 
     Raises:
         RuleSyntaxError, RuleError: as `parse_rules`; a missing file is a RuleSyntaxError.
+            The message is the first error's, saying how many more there are.
+    """
+    rules, errors = check_rules(paths, registry, warn)
+    if errors:
+        raise _first(errors)
+    return rules
+
+
+def check_rules(
+    paths: Iterable[str | Path],
+    registry: Registry,
+    warn: Callable[[str], None] | None = None,
+) -> tuple[list[Rule], list[RuleError]]:
+    """Parse rules files as `load_rules` does, but return every error instead of raising.
+
+    After an error the reader skips to the end of the broken rule and reads on, so the
+    errors are all those of all files (in reading order, each once); the rules are those
+    that are well formed.
     """
     warn = warn or log.warning
-    reader = _Reader(registry, (), warn)
-    rules = [rule for path in paths for rule in reader.read_file(Path(path), DEFAULT_PREFIXES)]
-    return mark_shared_names(rules, warn)
+    reader = _Reader(registry, (), warn, [])
+    rules: list[Rule] = []
+    for path in paths:
+        try:
+            rules.extend(reader.read_file(Path(path), DEFAULT_PREFIXES))
+        except RuleError as exc:
+            reader.record(exc)
+    return mark_shared_names(rules, warn), reader.errors
+
+
+def _first(errors: list[RuleError]) -> RuleError:
+    """Return the first error, its message saying how many more were found."""
+    first = errors[0]
+    if len(errors) == 1:
+        return first
+    more = len(errors) - 1
+    note = f" (and {more} more error{'s' if more > 1 else ''}: `tspace rules check` lists them)"
+    return type(first)(f"{first}{note}")
 
 
 class _Reader:
-    """Turn files into rules, following includes (and refusing include cycles)."""
+    """Turn files into rules, following includes (and refusing include cycles).
+
+    Errors are not raised but recorded in `errors` (shared with the readers of included
+    files), the reader skipping what it cannot read.
+    """
 
     def __init__(
-        self, registry: Registry, including: tuple[Path, ...], warn: Callable[[str], None]
+        self,
+        registry: Registry,
+        including: tuple[Path, ...],
+        warn: Callable[[str], None],
+        errors: list[RuleError],
     ) -> None:
         self.registry = registry
         self.including = including
         self.warn = warn
+        self.errors = errors
+
+    def record(self, error: RuleError) -> None:
+        """Keep `error` unless the same one is already kept (a rule read twice on recovery)."""
+        if all(str(error) != str(kept) for kept in self.errors):
+            self.errors.append(error)
 
     def read_file(
         self, path: Path, prefixes: dict[str, str], where: Location | None = None
@@ -116,38 +170,63 @@ class _Reader:
             ) from exc
         except UnicodeDecodeError as exc:
             raise RuleSyntaxError(located(where, None, f"{path}: not UTF-8 text")) from exc
-        inner = _Reader(self.registry, (*self.including, resolved), self.warn)
+        inner = _Reader(self.registry, (*self.including, resolved), self.warn, self.errors)
         yield from inner.read(text, str(path), dict(prefixes))
 
     def read(self, text: str, source: str, prefixes: dict[str, str]) -> Iterator[Rule]:
         lexed = lex(text, source)
         includes = []
         for directive in lexed.directives:
-            ignored = _ignored(directive.rest)
+            ignored = ignored_text(directive.rest)
             if ignored:
                 self.warn(
                     f"{directive.where}: text after {directive.keyword}'s <...> is ignored, as "
                     f"Jena ignores it: {ignored[:40]!r} (write it on a line of its own)"
                 )
             if directive.keyword == "@prefix":
-                name, iri = _prefix(directive)
+                try:
+                    name, iri = prefix_line(directive)
+                except RuleError as exc:
+                    self.record(exc)
+                    continue
                 prefixes[name] = iri
             else:
                 includes.append(directive)
         for directive in includes:
-            yield from self.include(directive, source, prefixes)
+            try:
+                yield from self.include(directive, source, prefixes)
+            except RuleError as exc:
+                self.record(exc)
         parser = _Parser(lexed.tokens, lexed.end, self.registry, prefixes)
         while not parser.done():
-            for nested in flatten(parser.rule()):
-                for rule in expand_list_maps(nested, self.registry):
-                    rule = blank_head_variables(regex_groups(rule), self.registry)
-                    check_rule(rule)
-                    yield rule
+            start = parser.position
+            try:
+                rules = self.complete(parser.rule())
+            except RuleError as exc:
+                self.record(exc)
+                resume = parser.resume(start)
+                if resume.unclosed and _AT_END not in str(exc):
+                    opening, label = lexed.tokens[start : start + 2]
+                    name = label.text[:-1] if label.text.endswith(":") else None
+                    message = "syntax error: this '[' is never closed (a ']' is missing)"
+                    self.record(RuleSyntaxError(located(opening.where, name, message)))
+                continue
+            yield from rules
+
+    def complete(self, rule: Rule) -> list[Rule]:
+        """Return the rules one parsed rule stands for (nested, list maps), each checked."""
+        done = []
+        for nested in flatten(rule):
+            for expanded in expand_list_maps(nested, self.registry):
+                expanded = blank_head_variables(regex_groups(expanded), self.registry)
+                check_rule(expanded)
+                done.append(expanded)
+        return done
 
     def include(
         self, directive: Directive, source: str, prefixes: dict[str, str]
     ) -> Iterator[Rule]:
-        target = _uri_argument(directive.rest, directive)
+        target = uri_argument(directive.rest, directive)
         if is_builtin_ruleset(target):
             text, name = read_builtin_ruleset(target, directive.where)
             yield from self.read(text, name, dict(DEFAULT_PREFIXES))
@@ -158,35 +237,6 @@ class _Reader:
         if not path.is_absolute():
             path = Path(source).parent / path
         yield from self.read_file(path, prefixes, directive.where)
-
-
-def _prefix(directive: Directive) -> tuple[str, str]:
-    """Read `@prefix name: <iri>` as Jena does: a word, then the IRI (the colon optional)."""
-    words = directive.rest.split(None, 1)
-    if len(words) < 2:
-        raise RuleSyntaxError(located(directive.where, None, "@prefix needs a name and an IRI"))
-    name = words[0].removesuffix(":")
-    return name, _uri_argument(words[1], directive)
-
-
-def _ignored(rest: str) -> str:
-    """Return what follows a directive's `<...>` other than a dot: Jena drops it unread."""
-    close = rest.find(">")
-    return rest[close + 1 :].strip().removeprefix(".").strip() if close >= 0 else ""
-
-
-def _uri_argument(rest: str, directive: Directive) -> str:
-    """Return `<...>`'s content, or the trimmed rest of the line when it has no `<`."""
-    token = rest.strip()
-    if token.startswith("<"):
-        close = token.find(">")
-        if close < 0:
-            message = f"{directive.keyword}: '<' without '>'"
-            raise RuleSyntaxError(located(directive.where, None, message))
-        return token[1:close]
-    if not token:
-        raise RuleSyntaxError(located(directive.where, None, f"{directive.keyword} needs an IRI"))
-    return token
 
 
 class _Parser:
@@ -217,6 +267,14 @@ class _Parser:
         if token.kind is Kind.UNCLOSED:
             raise self.fail(token, f"syntax error: string not closed ({token.text})")
         return token
+
+    def resume(self, start: int) -> Resume:
+        """Move past the rule that began at token `start`, after an error in it."""
+        resume = resume_after(self.tokens, start)
+        self.position = resume.at
+        self.name = None
+        self.opened.clear()
+        return resume
 
     def fail(self, token: Token, message: str) -> RuleSyntaxError:
         return RuleSyntaxError(located(token.where, self.name, message))
@@ -326,7 +384,7 @@ class _Parser:
         raise RuleError(located(token.where, self.name, f"unknown prefix '{prefix}:'"))
 
     def _at_end(self) -> str:
-        message = "syntax error: unexpected end of file"
+        message = f"syntax error: {_AT_END}"
         for opening, name, is_rule in reversed(self.opened):
             if is_rule and opening.text == "[":
                 rule = f"rule '{name}'" if name else "the rule"
