@@ -37,6 +37,7 @@ from agents.vocabulary import AC, local_name
 from space import (
     Change,
     ChangeRecord,
+    ClusterWatch,
     MalformedPayload,
     PrefixMap,
     Template,
@@ -66,6 +67,8 @@ class Hmi(Agent):
         self._new_events: list[dict] = []
         self.server: HmiServer | None = None
         self._http: threading.Thread | None = None
+        self.cluster: ClusterWatch | None = None  # replicas' quorum, in cluster mode
+        self._cluster_line = ""
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -100,6 +103,9 @@ class Hmi(Agent):
     def shutdown(self) -> None:
         """End the event streams, stop the web server, then leave the space."""
         try:
+            if self.cluster is not None:
+                self.cluster.close()
+                self.cluster = None
             self.board.close()
             if self.server is not None:
                 if self._http is not None:
@@ -112,6 +118,8 @@ class Hmi(Agent):
     def on_start(self) -> None:
         """Rebuild the history from the store's log, then show the state the space has now."""
         assert self.ts is not None
+        if self.cluster is None:
+            self.cluster = ClusterWatch(self.ts.session)
         seq = self.ts.seq(timeout=self.args.timeout)
         changes, _ = self.ts.history(max(1, seq - LOOKBACK + 1), seq, timeout=self.args.timeout)
         self._new_events = self.history.events(changes, self.view.graph)
@@ -128,6 +136,10 @@ class Hmi(Agent):
     def tick(self) -> None:
         """Run the commands the page sent since the last tick; tell the page of renewals."""
         self.commands.run_pending(self._command)
+        line = self.cluster.line() if self.cluster is not None else ""
+        if line != self._cluster_line:  # first: a minority side's reads below fail
+            self._cluster_line = line
+            self._publish()
         assert self.ts is not None
         if self.freshness.poll(self.ts, self.args.timeout):
             self._publish()
@@ -160,6 +172,7 @@ class Hmi(Agent):
                 "firings": [asdict(f) for f in read_firings(self.records)],
                 "tasks": [t for t in TASK_TYPES if self.view.task_of_type(t) is not None],
                 "levels": self._levels(),
+                "cluster": self.cluster.statuses() if self.cluster is not None else [],
             },
             events,
         )

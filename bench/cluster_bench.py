@@ -16,7 +16,10 @@ from the kill to the first ack of a write sent after it.
 
 Targets (issue 10): >= 5,000 changesets/s, ack p99 <= 20 ms, failover <= 3 s.
 
-    .venv/bin/python bench/cluster_bench.py [--runs 3] [--seconds 5] [--inflight 64]
+With `--store`, the same figures through three `tspace serve --cluster`
+replicas and Zenoh clients (`_cluster_store.py`): what a robot sees.
+
+    .venv/bin/python bench/cluster_bench.py [--runs 3] [--seconds 5] [--inflight 64] [--store]
 """
 
 from __future__ import annotations
@@ -159,7 +162,7 @@ async def failover_run(cluster: LocalCluster, inflight: int) -> float:
         await client.close()
 
 
-def plot(latencies: list[float], failovers: list[float]) -> Path:
+def plot(latencies: list[float], failovers: list[float], name: str = "cluster") -> Path:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -171,16 +174,17 @@ def plot(latencies: list[float], failovers: list[float]) -> Path:
     left.step(values, [(i + 1) / len(values) for i in range(len(values))], where="post")
     left.axvline(20, linestyle="--", color="grey")
     left.annotate("target p99 20 ms", (20, 0.1), rotation=90)
-    left.set_xlabel("append -> ack (ms)")
+    left.set_xlabel("append -> ack (ms)" if name == "cluster" else "send -> ack (ms)")
     left.set_ylabel("share of changesets")
-    left.set_title("Ack latency, 3 etcd members, 64 in flight")
+    where = "through 3 replicas" if name != "cluster" else "3 etcd members"
+    left.set_title(f"Ack latency, {where}, 64 in flight")
     left.grid(True, alpha=0.3)
     right.bar(range(1, len(failovers) + 1), failovers)
     right.axhline(3.0, linestyle="--", color="grey")
     right.set_xlabel("run")
     right.set_ylabel("leader kill -9 -> next ack (s)")
     right.set_title("Failover")
-    path = OUT / "cluster.png"
+    path = OUT / f"{name}.png"
     figure.savefig(path, dpi=120, bbox_inches="tight")
     return path
 
@@ -224,10 +228,45 @@ def main(runs: int, seconds: float, inflight: int) -> None:
     print(f"plot: {plot(latencies, failovers)}")
 
 
+def main_store(runs: int, seconds: float, inflight: int) -> None:
+    from _cluster_store import embedded_once, run_once
+
+    rows, latencies, failovers = [], [], []
+    for run in range(runs):
+        one = embedded_once(seconds, inflight)
+        with tempfile.TemporaryDirectory(prefix="tspace-cluster-store-") as tmp:
+            r = run_once(Path(tmp), seconds, inflight)
+        latencies += r.pop("latencies")  # type: ignore[arg-type]
+        failovers.append(r["failover"])
+        cluster = [r["rate"], r["p50"], r["p99"], r["failed"], r["failover"]]
+        rows.append([run + 1, one["rate"], one["p99"], *cluster, os.getloadavg()[0]])
+        print(rows[-1], flush=True)
+    rows.append(["median", *(median([r[i] for r in rows]) for i in range(1, 9))])
+    print_table(
+        f"through the store, {inflight} in flight, {seconds:g} s per run: one embedded store, "
+        "then 3 etcd members and 3 replicas on this host "
+        "(targets: >= 5000/s, p99 <= 20 ms, failover <= 3 s)",
+        [
+            "run",
+            "embedded cs/s",
+            "p99 ms",
+            "cluster cs/s",
+            "p50 ms",
+            "p99 ms",
+            "refused",
+            "failover s",
+            "load",
+        ],
+        rows,
+    )
+    print(f"plot: {plot(latencies, failovers, 'cluster-store')}")
+
+
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--seconds", type=float, default=5.0)
     parser.add_argument("--inflight", type=int, default=64)
+    parser.add_argument("--store", action="store_true", help="through store replicas and Zenoh")
     args = parser.parse_args()
-    main(args.runs, args.seconds, args.inflight)
+    (main_store if args.store else main)(args.runs, args.seconds, args.inflight)

@@ -9,7 +9,11 @@ Scenarios (issue 10): a minority cut (10 s), a cut of the leader's host
 (10 s), flapping links (a random host cut every 5 s for 60 s, 2.5 s each),
 kill -9 of the leading member and of a replica, 5 times.
 
-    .venv/bin/python bench/cluster_faults.py [--flap-seconds 60]
+With `--store`, each host runs a `tspace serve --cluster` replica and robots
+that write and take through it (tests/storefleet.py); the checker then reads
+every replica's log and state.
+
+    .venv/bin/python bench/cluster_faults.py [--flap-seconds 60] [--store]
 """
 
 from __future__ import annotations
@@ -19,27 +23,33 @@ import random
 import sys
 import tempfile
 import time
+from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
 
 from _harness import print_table
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from logfleet import NAMES, LogFleet, check
+import logfleet
+import storefleet
+from logfleet import NAMES, LogFleet
 from netns import Network, netns_unavailable
+from storefleet import StoreFleet
+
+Fleet = LogFleet | StoreFleet
 
 
-def minority_cut(fleet: LogFleet, seconds: float) -> None:
+def minority_cut(fleet: Fleet, seconds: float) -> None:
     with fleet.net["c"].outage(seconds):
         pass
 
 
-def leader_cut(fleet: LogFleet, seconds: float) -> None:
+def leader_cut(fleet: Fleet, seconds: float) -> None:
     with fleet.net[fleet.leader()].outage(seconds):
         pass
 
 
-def flapping(fleet: LogFleet, seconds: float) -> None:
+def flapping(fleet: Fleet, seconds: float) -> None:
     rng = random.Random(7)
     end = time.monotonic() + seconds
     while time.monotonic() < end:
@@ -48,22 +58,26 @@ def flapping(fleet: LogFleet, seconds: float) -> None:
         time.sleep(2.5)  # the links are up between cuts
 
 
-def kills(fleet: LogFleet, rounds: int) -> None:
+def kills(fleet: Fleet, rounds: int) -> None:
     for _ in range(rounds):
         leader = fleet.leader()
         fleet.kill_etcd(leader)
         fleet.wait_acked(next(h for h in NAMES if h != leader), 10, after=time.time())
         fleet.start_etcd(leader)
         victim = random.choice(NAMES)
-        fleet.kill_node(victim)
-        fleet.start_node(victim)
+        if isinstance(fleet, StoreFleet):
+            fleet.kill_replica(victim)
+            fleet.start_replica(victim)
+        else:
+            fleet.kill_node(victim)
+            fleet.start_node(victim)
         fleet.wait_acked(victim, 20, after=time.time())
 
 
-def run(name: str, scenario: Callable[[LogFleet], None]) -> list[object]:
+def run(name: str, scenario: Callable[[Fleet], None], store: bool) -> list[object]:
     with tempfile.TemporaryDirectory(prefix="tsf-") as tmp:
         with Network(list(NAMES), Path(tmp)) as net:
-            fleet = LogFleet(net)
+            fleet: Fleet = StoreFleet(net) if store else LogFleet(net)
             fleet.start()
             began = time.monotonic()
             scenario(fleet)
@@ -71,8 +85,11 @@ def run(name: str, scenario: Callable[[LogFleet], None]) -> list[object]:
                 fleet.wait_acked(h, 30, after=time.time())
             elapsed = time.monotonic() - began
             settle = fleet.quiesce()
-            fleet.stop()
-            verdict = check(fleet)
+            if isinstance(fleet, StoreFleet):
+                verdict = storefleet.check(fleet)
+            else:
+                fleet.stop()
+                verdict = logfleet.check(fleet)
     refused = ", ".join(f"{k} {v}" for k, v in sorted(verdict.refused.items()))
     return [
         name,
@@ -83,15 +100,16 @@ def run(name: str, scenario: Callable[[LogFleet], None]) -> list[object]:
         len(verdict.violations),
         f"{settle:.2f}",
         "; ".join(verdict.violations[:3]) or "-",
-        "; ".join(f"{n}x {m}" for m, n in verdict.reasons.most_common(3)) or "-",
+        "; ".join(f"{n}x {m}" for m, n in getattr(verdict, "reasons", Counter()).most_common(3))
+        or "-",
     ]
 
 
-def main(flap: float, cut: float) -> None:
+def main(flap: float, cut: float, store: bool) -> None:
     reason = netns_unavailable()
     if reason:
         sys.exit(f"cannot run: {reason}")
-    scenarios: list[tuple[str, Callable[[LogFleet], None]]] = [
+    scenarios: list[tuple[str, Callable[[Fleet], None]]] = [
         (f"minority cut {cut:g} s", lambda f: minority_cut(f, cut)),
         (f"leader cut {cut:g} s", lambda f: leader_cut(f, cut)),
         (f"flapping {flap:g} s", lambda f: flapping(f, flap)),
@@ -99,10 +117,11 @@ def main(flap: float, cut: float) -> None:
     ]
     rows = []
     for name, scenario in scenarios:
-        rows.append(run(name, scenario))
+        rows.append(run(name, scenario, store))
         print(rows[-1], flush=True)
     print_table(
-        "etcd log under faults, 3 hosts (netns), writers and takers on every host",
+        ("store replicas" if store else "etcd log")
+        + " under faults, 3 hosts (netns), writers and takers on every host",
         [
             "scenario",
             "s",
@@ -122,5 +141,6 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--flap-seconds", type=float, default=60.0)
     parser.add_argument("--cut-seconds", type=float, default=10.0)
+    parser.add_argument("--store", action="store_true", help="tspace serve --cluster replicas")
     args = parser.parse_args()
-    main(args.flap_seconds, args.cut_seconds)
+    main(args.flap_seconds, args.cut_seconds, args.store)

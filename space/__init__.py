@@ -17,10 +17,12 @@ from space.ack import Ack, Dropped
 from space.changeset import Changeset
 from space.cli.options import add_connect, identity_of
 from space.client import Transaction, TripleSpace
+from space.cluster_status import ClusterWatch
 from space.errors import (
     ChangesetRejected,
     InputError,
     MalformedPayload,
+    NoQuorum,
     NoReasoner,
     NotApplied,
     QueryError,
@@ -55,11 +57,13 @@ __all__ = [
     "ChangeRecord",
     "Changeset",
     "ChangesetRejected",
+    "ClusterWatch",
     "Dropped",
     "Explanation",
     "Identity",
     "InputError",
     "MalformedPayload",
+    "NoQuorum",
     "NoReasoner",
     "NotApplied",
     "Pending",

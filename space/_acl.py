@@ -44,6 +44,7 @@ def everything(root: str = keys.ROOT) -> list[str]:
         f"{root}/*/@reasoners/**",
         f"{root}/@stores/**",
         f"{root}/@repl/**",
+        f"{root}/@cluster/**",
         f"{root}/*/@leader/**",
         f"{root}/@leader/**",
     ]
@@ -60,6 +61,7 @@ def _reads(root: str) -> list[dict]:
                 f"{space}/@/changes",
                 f"{space}/@/changes/*/*",
                 f"{space}/@/seq",
+                f"{root}/@cluster/*",
             ],
         ),
         _rule(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import time
 
 import zenoh
@@ -9,6 +10,7 @@ import zenoh
 from space.changeset import unpack
 from space.errors import (
     ChangesetRejected,
+    NoQuorum,
     QueryError,
     QueryTimeLimit,
     SpaceTimeout,
@@ -86,7 +88,11 @@ def _get(session: zenoh.Session, key: str, payload: bytes, timeout: float) -> ze
 # The error reply Zenoh itself makes when a queryable was reached but did not answer in
 # time; the store's own error replies are sentences, never this one word.
 _ZENOH_TIMEOUT = "Timeout"
-TIME_LIMIT = "time limit: "  # how the store's error reply to a read past its time limit starts
+TIME_LIMIT = "time limit: "
+# A cluster replica on a minority side refuses with NoQuorum's sentence (space.errors).
+_NO_QUORUM = re.compile(
+    r"no quorum: (\d+) of (\d+) members reachable(?: \((.*)\))?$"
+)  # how the store's error reply to a read past its time limit starts
 
 
 def _decode(replies: list[zenoh.Reply], key: str, timeout: float, what: str) -> dict:
@@ -101,6 +107,9 @@ def _decode(replies: list[zenoh.Reply], key: str, timeout: float, what: str) -> 
     refusals = [message for message in errors if message != _ZENOH_TIMEOUT]
     if refusals and refusals[0].startswith(TIME_LIMIT):
         raise QueryTimeLimit(refusals[0][len(TIME_LIMIT) :])
+    quorum = _NO_QUORUM.match(refusals[0]) if refusals else None
+    if quorum:
+        raise NoQuorum(int(quorum[1]), int(quorum[2]), quorum[3] or "")
     if refusals:
         raise (ChangesetRejected if what == "write" else QueryError)(refusals[0])
     if errors:

@@ -73,6 +73,9 @@ class TripleSpace:
     ) -> None:
         self.session = session
         self.strict = strict
+        # In cluster mode a read is refused where no quorum is reachable (NoQuorum),
+        # unless the caller accepts a possibly stale answer: per call or here.
+        self.stale = False
         self.lifespan = check_lifespan(lifespan)  # the default of every write (None: permanent)
         self.space = keys.check_space(space)
         # In a secure space a router lets each identity write (and take) only on
@@ -318,9 +321,11 @@ class TripleSpace:
 
     # Reading
 
-    def _ask(self, request: dict, timeout: float) -> dict:
+    def _ask(self, request: dict, timeout: float, stale: bool | None = None) -> dict:
         # The store gives up a little before the caller does, so the caller hears why.
         request["limit"] = max(0.05, timeout - max(0.1, min(1.0, timeout * 0.1)))
+        if self.stale if stale is None else stale:
+            request["stale"] = True  # see docs/wire-format.md
         return ask_store(self.session, self._key("query"), pack(request), timeout, what="query")
 
     def _template(self, template: TemplateLike) -> Template:
@@ -346,13 +351,22 @@ class TripleSpace:
         return self._graph(self._ask({"op": "read", "template": t.to_wire()}, timeout))
 
     def query(
-        self, template: TemplateLike = None, *, graph: str = "all", timeout: float = 5.0
+        self,
+        template: TemplateLike = None,
+        *,
+        graph: str = "all",
+        timeout: float = 5.0,
+        stale: bool | None = None,
     ) -> Graph:
-        """Return every matching triple of the asserted, inferred or `all` graphs."""
+        """Return every matching triple of the asserted, inferred or `all` graphs.
+
+        `stale` (default: the handle's `stale`): in cluster mode, answer from
+        the nearest replica even where no quorum is reachable (possibly behind)
+        instead of raising `NoQuorum`.
+        """
         t = self._template(template)
-        return self._graph(
-            self._ask({"op": "query", "template": t.to_wire(), "graph": graph}, timeout)
-        )
+        request = {"op": "query", "template": t.to_wire(), "graph": graph}
+        return self._graph(self._ask(request, timeout, stale))
 
     def match(
         self, template: TemplateLike = None, *, graph: str = "all", timeout: float = 5.0

@@ -8,6 +8,7 @@ import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import zenoh
 
@@ -17,6 +18,9 @@ from space.errors import InputError
 from space.identity import Identity
 from space.store.guard import WriteGuard
 from space.store.server import StoreServer
+
+if TYPE_CHECKING:
+    from space.store.cluster_server import ClusterStoreServer
 
 log = logging.getLogger("tspace.serve")
 DEFAULT_POLICY = Path("deploy/policy.toml")  # in the current directory
@@ -36,12 +40,14 @@ def open_server(
     store: bool = True,
     identity: Identity | None = None,
     policy_file: str | Path | None = None,
-) -> Iterator[StoreServer | None]:
+    cluster: list[str] | None = None,
+) -> Iterator[StoreServer | ClusterStoreServer | None]:
     """Open a router-mode Zenoh session with the store on it (unless `store=False`); close both.
 
     With `identity`, the router speaks mutual TLS only and enforces the policy
     (`policy_file`, default `DEFAULT_POLICY`) on its clients, and
-    the store checks every write against it.
+    the store checks every write against it. With `cluster` (etcd members'
+    `host:port`), the store is a replica of that cluster (docs/cluster.md).
 
     Raises:
         InputError: the policy file is missing, cannot be read or is malformed.
@@ -56,17 +62,30 @@ def open_server(
     )
     try:
         listener = session.info.declare_transport_events_listener(_log_transport)
-        # Meshed with other routers, a store first looks a while for a leading store there.
-        server = StoreServer(
-            session,
-            data_dir or default_data_dir(),
-            durable=durable,
-            log_keep=log_keep,
-            query_timeout=query_timeout,
-            max_spaces=max_spaces,
-            look_for_leader=2.0 if connect else 0.0,
-            guard=guard,
-        )
+        server: StoreServer | ClusterStoreServer
+        if cluster:
+            from space.store.cluster_server import ClusterStoreServer  # imports etcd's client
+
+            server = ClusterStoreServer(
+                session,
+                data_dir or default_data_dir(),
+                cluster,
+                durable=durable,
+                log_keep=log_keep,
+                query_timeout=query_timeout,
+                max_spaces=max_spaces,
+                guard=guard,
+            )
+        else:
+            server = StoreServer(
+                session,
+                data_dir or default_data_dir(),
+                durable=durable,
+                log_keep=log_keep,
+                query_timeout=query_timeout,
+                max_spaces=max_spaces,
+                guard=guard,
+            )
         if store:
             server.start()
         try:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 import uuid
 
 import msgpack
@@ -107,29 +106,6 @@ def test_spaces_beyond_the_limit_are_refused_with_the_option_named(tmp_path):
             TripleSpace(ts.session, "s0").write([(AC.a, AC.b, Literal(9))])  # known: fine
     finally:
         srv.stop()
-
-
-def test_a_fake_leader_token_does_not_make_the_store_step_down(server):
-    with TripleSpace.open(server.endpoint, space="lead") as ts:
-        token = ts.session.liveliness().declare_token("tspace/@leader/0")
-        deadline = time.monotonic() + 2
-        while time.monotonic() < deadline:
-            ts.write([(AC.lead, AC.n, Literal(time.monotonic()))], timeout=5)
-        token.undeclare()
-        ts.write([(AC.lead, AC.last, Literal(1))], timeout=5)
-        assert "ignoring a leader token 0" in server.logs()
-
-
-def test_a_fake_store_token_does_not_slow_acknowledgements(server):
-    with TripleSpace.open(server.endpoint, space="slow") as ts:
-        token = ts.session.liveliness().declare_token(f"tspace/@stores/{'f' * 32}")
-        try:
-            begun = time.monotonic()
-            for i in range(5):
-                ts.write([(AC.fast, AC.n, Literal(i))])
-            assert time.monotonic() - begun < 2.5, "each acknowledgement waited for a fake follower"
-        finally:
-            token.undeclare()
 
 
 def test_uri_with_escapes_round_trips(ts):

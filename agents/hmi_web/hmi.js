@@ -260,7 +260,22 @@ function render(state) {
   document.getElementById("space").textContent = state.space ? `— space ${state.space}` : "";
   for (const robot of state.robots) renderRobot(robot, state);
   renderSites(state.robots);
+  renderQuorum(state.cluster || []);
   queueRedraw();
+}
+
+// Store replicas on etcd: members each reaches; an embedded store shows nothing.
+function renderQuorum(replicas) {
+  const line = document.getElementById("quorum");
+  line.hidden = replicas.length === 0;
+  const told = replicas.map((r) => {
+    if (r.silent) return `${r.node}: silent`;
+    const reach = `${r.reachable} of ${r.members} members reachable`;
+    return r.quorum ? `${r.node}: ${reach}` : `${r.node}: no quorum: ${reach}`;
+  });
+  line.textContent = `store replicas — ${told.join("; ")}`;
+  const whole = replicas.every((r) => r.quorum && !r.silent);
+  line.className = `status ${whole ? "online" : "offline"}`;
 }
 
 function connect() {

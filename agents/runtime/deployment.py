@@ -23,6 +23,7 @@ from agents.runtime.robotview import BadValues, read_firings, read_robots
 from agents.runtime.scenario import Scenario, ScenarioRun
 from agents.runtime.supervisor import ProcessSpec, Supervisor
 from space import (
+    ClusterWatch,
     SpaceError,
     SpaceMirror,
     TripleSpace,
@@ -96,6 +97,7 @@ class Deployment:
         self._said: dict[str, str] = {}  # firings' sentences by changeset id
         self._view_failure = ""
         self.scenario: ScenarioRun | None = None
+        self.cluster: ClusterWatch | None = None
         self.robot = launch.robots[0] if launch.robots else "robot1"
         self.hmi_port: int | None = None
         self.operator = None
@@ -187,6 +189,9 @@ class Deployment:
             return self._loop(ts)
         finally:
             self.mirror.detach()
+            if self.cluster is not None:
+                self.cluster.close()
+                self.cluster = None
             if ts is not None:
                 ts.close()
             self.supervisor.stop()
@@ -257,9 +262,15 @@ class Deployment:
             run = self.scenario
             self.mirror.watch(lambda: run.observe(self.mirror))
         self.mirror.attach(ts)
+        # Replicas on etcd say whether they reach a quorum; an embedded store says nothing.
+        self.cluster = ClusterWatch(ts.session)
+        told = ""
         shown, shown_at = -1, 0.0
         while not self.stop_requested.is_set():
             self.supervisor.poll()
+            if self.cluster.line() != told:
+                told = self.cluster.line()
+                self.view.event(told or "store replicas: none heard from")
             if self.scenario is not None:
                 status = self._tick_scenario(ts, self.scenario)
                 if status is not None:
@@ -316,6 +327,8 @@ class Deployment:
         url = self.hmi_url()
         if url:
             header += f", HMI {url}"
+        if self.cluster is not None and self.cluster.line():
+            header += f"\n{self.cluster.line()}"
         graph = self.mirror.copy()
         return Frame(
             header=header,

@@ -33,6 +33,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="for templates: which graph (default all)",
     )
     p.add_argument(
+        "--stale",
+        action="store_true",
+        help="cluster mode: answer from this replica even without a quorum (possibly behind) "
+        "instead of failing with 'no quorum'",
+    )
+    p.add_argument(
         "--with-lifespan",
         action="store_true",
         help="for templates: asserted triples only, with the seconds each has left to live",
@@ -50,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
     if args.with_lifespan and (args.template is None or args.format == "turtle"):
         raise UsageError("--with-lifespan goes with --template, as a table or JSON")
     with open_space(args, agent="tspace-query") as ts:
+        ts.stale = args.stale
         prefixes = ts.load_prefixes(timeout=args.timeout)
         if args.template is not None:
             from space.template import Template

@@ -67,9 +67,28 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="spaces this store holds at most; a write to one more is refused (default 10000)",
     )
     p.add_argument(
+        "--cluster",
+        metavar="HOST:PORT,...",
+        type=etcd_members,
+        help="be one replica of a store replicated on this etcd cluster (its members' client "
+        "addresses, comma-separated; docs/cluster.md); default: one store, no etcd",
+    )
+    p.add_argument(
         "--no-store", action="store_true", help="route only: another process keeps the space"
     )
     p.set_defaults(func=run)
+
+
+def etcd_members(text: str) -> list[str]:
+    """Parse `--cluster`: etcd members' `host:port`, comma-separated."""
+    members = [m.strip() for m in text.split(",") if m.strip()]
+    for m in members:
+        host, _, port = m.rpartition(":")
+        if not host or not port.isdigit() or not 0 < int(port) < 65536:
+            raise argparse.ArgumentTypeError(f"{m!r} is not HOST:PORT (an etcd client address)")
+    if not members:
+        raise argparse.ArgumentTypeError("no etcd member given (HOST:PORT,HOST:PORT,...)")
+    return members
 
 
 def run(args: argparse.Namespace) -> int:
@@ -81,6 +100,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.policy and not args.secure:
         raise UsageError("--policy needs --secure DIR")
+    if args.cluster and args.no_store:
+        raise UsageError("--cluster runs a store replica: it cannot go with --no-store")
     logging.getLogger("tspace").setLevel(min(logging.getLogger().level, logging.INFO))
     serve_forever(
         listen=args.listen,
@@ -94,5 +115,6 @@ def run(args: argparse.Namespace) -> int:
         store=not args.no_store,
         identity=identity_of(args, "router" if args.no_store else "store"),
         policy_file=args.policy,
+        cluster=args.cluster,
     )
     return 0

@@ -25,12 +25,15 @@ from typing import Any, TypeVar
 
 from aetcd import rpc
 
-from space.store.cluster_keys import ROOT
+from space.store.cluster_keys import ROOT, prefix_end
 from space.store.etcd_applier import Applier, Apply, Relist
 from space.store.etcd_client import EtcdClient
 from space.store.etcd_log import ClusterLog, Entry, Position
 
 T = TypeVar("T")
+# Transactions in flight at once: etcd batches concurrent proposals into one Raft round, so a
+# changeset arriving while others commit is sent at once instead of waiting a round.
+INFLIGHT = 8
 
 
 class ClusterNode:
@@ -71,7 +74,7 @@ class ClusterNode:
     async def _open(self) -> None:
         self.client = EtcdClient(self.endpoints)
         await self.client.open()
-        self.log = ClusterLog(self.client, root=self.root, node=self.node)
+        self.log = ClusterLog(self.client, root=self.root, node=self.node, inflight=INFLIGHT)
         await self.log.start()
         self.applier = Applier(
             self.client,
@@ -112,6 +115,37 @@ class ClusterNode:
         request = rpc.RangeRequest(key=self.root, count_only=True)
         reply = self._call(client.range(request), timeout)
         return reply.header.revision
+
+    def barrier(self) -> concurrent.futures.Future[int]:
+        """Return a future of the last revision that logged a changeset (or of `NoQuorum`).
+
+        A linearizable read: once the replica applied that revision, it holds
+        every changeset acknowledged before the barrier was asked for, on any
+        replica. (etcd's own revision also counts puts outside the log, such
+        as the replicas' reports, which a replica never sees applied.)
+        """
+        client = self.client
+        assert client is not None, "start() first"
+        prefix = self.root + b"log/"
+        request = rpc.RangeRequest(
+            key=prefix,
+            range_end=prefix_end(prefix),
+            limit=1,
+            keys_only=True,
+            sort_order=rpc.RangeRequest.DESCEND,
+            sort_target=rpc.RangeRequest.MOD,
+        )
+
+        async def revision() -> int:
+            reply = await client.range(request)
+            return reply.kvs[0].mod_revision if reply.kvs else 0
+
+        return asyncio.run_coroutine_threadsafe(revision(), self._loop)
+
+    def reachable(self) -> concurrent.futures.Future[int]:
+        """`members` without waiting: a future of how many members answer now."""
+        assert self.client is not None, "start() first"
+        return asyncio.run_coroutine_threadsafe(self.client.reachable(), self._loop)
 
     def members(self, timeout: float = 2.0) -> tuple[int, int]:
         """Return (members reachable, members) now."""

@@ -217,23 +217,32 @@ class StoreDB:
         self,
         entries: list[Entry],
         extra: tuple[list[ox.Quad], list[ox.Quad]] = ([], []),
+        *,
+        revision: int | None = None,
     ) -> None:
         """Write a batch of changesets with their log entries and seqs, atomically.
 
         `extra`: quads to delete and to insert in the same update (leases).
+        `revision`: a cluster replica's applied etcd revision, written in the
+        same update (`space.store.cluster_db`), so a restart resumes there.
 
         Raises:
             CommitFailed: nothing of the batch was written.
         """
         from space.store import render
 
-        if not entries and not any(extra):
+        if not entries and not any(extra) and revision is None:
             return
         try:
-            if render.plain(entries) and not extra[0]:
+            if revision is None and not extra[0] and render.plain(entries):
                 self.store.load(render.nquads(entries, extra[1]), format=ox.RdfFormat.N_QUADS)
             else:
-                self.store.update(render.update(entries, extra))
+                ops = [render.update(entries, extra)] if entries or any(extra) else []
+                if revision is not None:
+                    from space.store.cluster_db import revision_ops
+
+                    ops += revision_ops(revision)
+                self.store.update(" ;\n".join(ops))
             if self.durable:
                 self.store.flush()
         except (OSError, RuntimeError) as exc:

@@ -51,6 +51,17 @@ class PartPublisher:
         first part on any key names it, and a subscriber that came in between (before
         the store heard of it) fetches what it may have missed from the log.
         """
+        self._chain(state, net, send=True)
+
+    def note(self, state: SpaceState, net: Net) -> None:
+        """Record a changeset another cluster replica publishes: the `prev` of its keys moves.
+
+        So the next part this replica publishes on such a key names that
+        changeset, and a subscriber that missed it fetches it from the log.
+        """
+        self._chain(state, net, send=False)
+
+    def _chain(self, state: SpaceState, net: Net, *, send: bool) -> None:
         space, seq = state.name, net.entry.seq
         if not self._watched(space):
             self._last[space] = {}
@@ -68,7 +79,7 @@ class PartPublisher:
             key = keys.part_key(space, s, p, self.root)
             prev = last.pop(key, floor)
             last[key] = seq
-            if len(key) <= MAX_KEY:
+            if send and len(key) <= MAX_KEY:
                 part["prev"] = prev
                 self.session.put(key, pack(part), congestion_control=block)
         if len(last) > MAX_KEYS:

@@ -45,6 +45,10 @@ class Publisher:
         for state, net in committed:
             self._triples(state, net)
 
+    def note(self, state: SpaceState, net: Net) -> None:
+        """Record a changeset another cluster replica publishes (its parts' `prev` chain)."""
+        self._parts.note(state, net)
+
     def _triples(self, state: SpaceState, net: Net) -> None:
         """Publish each triple of a net changeset on its key, for plain Zenoh subscribers.
 

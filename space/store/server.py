@@ -2,18 +2,17 @@
 
 Zenoh callbacks only enqueue. The writer thread takes requests in arrival
 order: writes and takes are decided (`state.py`), committed as one batch
-with their log entries (`db.py`), acknowledged only once committed (and, with
-replicas, once every follower has them), then published. A read is handed, in
-its turn, to a reader thread (`readers.py`): it sees every write acknowledged
-before it was sent, and a slow one never holds up the writer.
+with their log entries (`db.py`), acknowledged only once committed, then
+published. A read is handed, in its turn, to a reader thread (`readers.py`):
+it sees every write acknowledged before it was sent, and a slow one never
+holds up the writer.
 
-Several stores may hold the same spaces: `roles.py` decides which one leads
-(and serves them) and which follow; this module says what each role declares.
+One store holds its spaces; a fleet that must survive the loss of a store host
+runs replicas on etcd instead (`cluster_server.py`, `tspace serve --cluster`).
 """
 
 from __future__ import annotations
 
-import gc
 import logging
 import queue
 import threading
@@ -27,14 +26,11 @@ from space import keys
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload, QueryError, SpaceError
 from space.store import intake, lifespans, queries
-from space.store.acks import AckGate
 from space.store.db import StoreDB
 from space.store.guard import WriteGuard, writer_of
 from space.store.lifespans import Leases
 from space.store.publish import Publisher
 from space.store.readers import Readers
-from space.store.replica import Replica
-from space.store.roles import Roles
 from space.store.state import SpaceState
 from space.store.writer import Pending, Request, Writer, answer, reject
 
@@ -62,7 +58,6 @@ class StoreServer:
         durable: bool = False,
         log_keep: int = 100_000,
         root: str = keys.ROOT,
-        look_for_leader: float = 0.0,
         query_timeout: float = 10.0,
         query_slots: int = 16,
         max_spaces: int = 10_000,
@@ -77,16 +72,7 @@ class StoreServer:
         self.max_spaces = max_spaces
         self._queue: queue.SimpleQueue[Request | None] = queue.SimpleQueue()
         self._spaces: dict[str, SpaceState] = {}
-        self._acks = AckGate()
-        self._roles = Roles(
-            session,
-            root,
-            self._acks,
-            look_for_leader=look_for_leader,
-            leading=self._serve_leading,
-            following=self._serve_following,
-            seqs=self._seqs,
-        )
+        self._declared: list = []
         self._readers = Readers(limit=query_timeout, slots=query_slots)
         self._publisher = Publisher(session, root)
         self._db: StoreDB | None = None
@@ -95,11 +81,8 @@ class StoreServer:
         self._leases = Leases()
         self._busy_until = 0.0  # monotonic time until which requests are coming in
 
-    def start(self, timeout: float = 10.0) -> None:
-        """Open the database, find the leader or lead, then serve.
-
-        Blocks until this store leads or has caught up with the leader, or for
-        `timeout` seconds (a follower behind goes on trying in the background).
+    def start(self) -> None:
+        """Open the database, then serve.
 
         Raises:
             DataDirInUse: another store has the data directory open.
@@ -113,32 +96,24 @@ class StoreServer:
             self._db,
             spaces=self._spaces,
             space=self._space,
-            acks=self._acks,
             publisher=self._publisher,
             max_spaces=self.max_spaces,
             guard=self.guard,
             leases=self._leases,
         )
         self._leases.load(self._db)
-        replica = Replica(self.session, self.root, self._db, self._space, self._forget)
         for name in self._db.spaces():
             self._space(name)
-        self._roles.open(replica, self._on_peer)
         self._worker = threading.Thread(target=self._run, name="tspace-store", daemon=True)
         self._worker.start()
-        if not self._roles.ready.wait(timeout):
-            log.warning("store not ready after %g s (still catching up)", timeout)
-        log.info(
-            "store %s %s: %d space(s) from %s",
-            self._roles.zid,
-            self._roles.role,
-            len(self._spaces),
-            self._db.path,
-        )
+        self._declared = self._serve()
+        log.info("store: %d space(s) from %s", len(self._spaces), self._db.path)
 
     def close(self) -> None:
         """Stop serving, finish queued work and close the database (no-op if not started)."""
-        self._roles.close()
+        for declared in self._declared:
+            declared.undeclare()
+        self._declared = []
         if self._worker is not None:
             self._queue.put(None)
             self._worker.join()
@@ -169,30 +144,19 @@ class StoreServer:
 
         return callback
 
-    def _on_peer(self, what: str) -> Callable[[zenoh.Sample], None]:
-        def callback(sample: zenoh.Sample) -> None:
-            zid = str(sample.key_expr).rsplit("/", 1)[1]
-            alive = sample.kind == zenoh.SampleKind.PUT
-            self._queue.put(Request("peer", what, pack([zid, alive])))
-
-        return callback
-
     # The writer: the only thread that decides and commits.
 
     def _run(self) -> None:
-        self._roles.decide()
         next_beat = time.monotonic()
         while True:
-            self._roles.retry()
             if time.monotonic() >= next_beat:
                 self._heartbeat()
                 self._writer.probe(self._readers.running)
                 next_beat = time.monotonic() + HEARTBEAT
             batch: list[Request] = []
             wait = min(next_beat - time.monotonic(), self._expiry_wait())
-            held = self._acks.wait_time()
             try:
-                item = self._queue.get(timeout=max(0.0, wait if held is None else min(wait, held)))
+                item = self._queue.get(timeout=max(0.0, wait))
             except queue.Empty:
                 item = Request("tick", "", None)
             while item is not None:
@@ -204,7 +168,6 @@ class StoreServer:
                 except queue.Empty:
                     break
             self._handle(batch)
-            self._acks.release()
             if item is None:
                 return
             if batch[0].kind != "tick":
@@ -214,11 +177,7 @@ class StoreServer:
 
     def _handle(self, batch: list[Request]) -> None:
         pending: list[Pending] = []
-        replicas: list[Request] = []
         for req in batch:
-            if req.kind == "replica":
-                replicas.append(req)
-                continue
             try:
                 if req.kind == "write":
                     self._writer.write(req, pending)
@@ -237,26 +196,16 @@ class StoreServer:
                 log.exception("store failed on a %s request for %r", req.kind, req.space)
                 reject(req, QueryError(f"internal error: {type(exc).__name__}: {exc}"))
         self._writer.commit(pending)
-        if replicas:
-            self._roles.follow([(r.space, r.payload or b"") for r in replicas])
 
     def _heartbeat(self) -> None:
         """Publish each space's sequence number, so subscribers learn of changes they missed."""
-        if self._roles.role != "leading":
-            return
         for name, state in self._spaces.items():
             if state.seq:
                 self.session.put(keys.service_key(name, "seq", self.root), pack({"seq": state.seq}))
 
     def _other(self, req: Request) -> None:
-        if req.kind == "peer":
-            self._roles.peer(req.space, *unpack(req.payload or b""))  # type: ignore[misc]
-        elif req.kind == "ack":
-            self._ack(req.payload or b"")
-        elif req.kind == "spaces":
+        if req.kind == "spaces":
             answer(req, self._seqs())
-        elif req.kind == "state":
-            answer(req, self._copy(unpack(req.payload or b"")))
         elif req.kind in _READS:
             self._read(req)
 
@@ -294,27 +243,6 @@ class StoreServer:
             n for n in self._spaces if selector.intersects(zenoh.KeyExpr(f"{self.root}/{n}/**"))
         ]
 
-    def _copy(self, request: object) -> dict:
-        """Return a space whole, for a follower whose own copy cannot be continued."""
-        if not isinstance(request, dict) or not isinstance(request.get("space"), str):
-            raise MalformedPayload("a state request is a map {space}")
-        name = keys.check_space(request["space"])
-        db = self._db_()
-        state = self._spaces.get(name)
-        seq = state.seq if state else 0
-        last = db.log(name, seq, seq)
-        return {
-            "seq": seq,
-            "last": last[0][1] if last else b"",
-            "prefixes": db.prefixes(name),
-            "rows": list(db.triples(name)),
-        }
-
-    def _forget(self, name: str) -> None:
-        """Drop a space's state from memory (its database was replaced: `_space` reloads it)."""
-        self._spaces.pop(name, None)
-        gc.unfreeze()  # frozen at start (space._heap), the old state could never be freed
-
     def _db_(self) -> StoreDB:
         assert self._db is not None
         return self._db
@@ -335,8 +263,6 @@ class StoreServer:
         meanwhile waits for that one's commit at most; else about `lifespans.BUDGET`
         triples' worth, to sweep a mass expiry fast.
         """
-        if self._roles.role != "leading":
-            return
         pending: list[Pending] = []
         busy = time.monotonic() < self._busy_until
         try:
@@ -350,15 +276,13 @@ class StoreServer:
         return due is not None and due < time.time() - OVERDUE
 
     def _expiry_wait(self) -> float:
-        """Return the seconds until the next lease expires (a heartbeat if none or following)."""
+        """Return the seconds until the next lease expires (a heartbeat if none)."""
         due = self._leases.next_due()
-        if due is None or self._roles.role != "leading":
+        if due is None:
             return HEARTBEAT
         return max(0.0, due - time.time())
 
-    # What this store serves in each role (declared by `Roles`, on the worker).
-
-    def _serve_leading(self) -> list:
+    def _serve(self) -> list:
         root, s = self.root, self.session
         on_query = self._on_query
         return [
@@ -373,21 +297,13 @@ class StoreServer:
             s.declare_queryable(f"{root}/*/{keys.ASSERTED}/**", on_query("keys")),
             s.declare_queryable(f"{root}/*/{keys.INFERRED}/**", on_query("keys")),
             s.declare_queryable(f"{root}/@repl/spaces", on_query("spaces")),
-            s.declare_queryable(f"{root}/@repl/state", on_query("state")),
-            s.declare_subscriber(f"{root}/@repl/ack", self._on_sample("ack")),
+            # A subscriber that sees this token come back (a cut between us healed)
+            # fetches what it missed from the log (space.client, `_watch_store`).
+            s.liveliness().declare_token(f"{root}/@leader/{s.zid()}"),
         ]
-
-    def _serve_following(self) -> list:
-        changes = f"{self.root}/*/@/changes"
-        return [self.session.declare_subscriber(changes, self._on_sample("replica"))]
 
     def _seqs(self) -> dict[str, int]:
         return {name: state.seq for name, state in self._spaces.items()}
-
-    def _ack(self, payload: bytes) -> None:
-        message = unpack(payload)
-        if isinstance(message, dict) and isinstance(message.get("seqs"), dict):
-            self._acks.acked(str(message.get("store")), message["seqs"])
 
 
 def _op(payload: bytes | None) -> object:

@@ -1,8 +1,8 @@
 """The store's writer: decide writes and takes, commit them in batches, answer, publish.
 
 Writer thread only. A write or take is decided (`state.py`) into a `Pending`;
-a batch of them is committed at once (`db.py`), then each is answered (held
-for followers by the `AckGate` if there are any) and published. A commit that
+a batch of them is committed at once (`db.py`), then each is answered and
+published. A commit that
 fails makes the store fail-stop: every write is refused until `probe` finds
 the database committing again (docs/store.md).
 """
@@ -21,7 +21,6 @@ from space import keys
 from space.changeset import pack, unpack
 from space.errors import QueryError, SpaceError
 from space.store import intake
-from space.store.acks import AckGate
 from space.store.db import CommitFailed, StoreDB
 from space.store.guard import Refused, WriteGuard
 from space.store.lifespans import Leases, retractions
@@ -39,7 +38,7 @@ class SpaceLimit(SpaceError):
 
 @dataclass
 class Request:
-    kind: str  # a service, or "replica", "ack", "peer", "spaces", "state"
+    kind: str  # a service ("write", "query", "log", "keys") or "spaces"
     space: str
     payload: bytes | None
     query: zenoh.Query | None = None
@@ -75,7 +74,6 @@ class Writer:
         *,
         spaces: dict[str, SpaceState],
         space: Callable[[str], SpaceState],
-        acks: AckGate,
         publisher: Publisher,
         max_spaces: int,
         guard: WriteGuard | None = None,
@@ -88,7 +86,6 @@ class Writer:
         self.max_spaces = max_spaces
         self._spaces = spaces
         self._space = space
-        self._acks = acks
         self._publisher = publisher
         self._next_probe = 0.0
         self._leases = leases
@@ -216,11 +213,8 @@ class Writer:
         for p in pending:
             if p.req.query is None:
                 continue
-            seq = p.net.entry.seq if p.net else p.state.seq
-            ack = pack(p.reply(p.net))
-            if not self._acks.hold(p.state.name, seq, p.req.query, p.req.key, ack):
-                p.req.query.reply(p.req.key, ack)
-                p.req.query.drop()
+            p.req.query.reply(p.req.key, pack(p.reply(p.net)))
+            p.req.query.drop()
 
     def _fail(self, exc: CommitFailed, pending: list[Pending]) -> None:
         """Refuse writes from now on; forget what the batch decided; tell every writer."""

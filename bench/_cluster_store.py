@@ -1,0 +1,171 @@
+"""`cluster_bench.py --store`: the same figures measured through three store replicas.
+
+Three etcd members and three `tspace serve --cluster` replicas on this
+machine, each replica behind its own router. One client process keeps
+`inflight` writes in flight (`send_later`), spread over the three replicas;
+each write is one robot's battery level, a functional property, so each is a
+compare-and-swap in etcd. An ack comes once the replica that took the write
+applied the revision it committed at (docs/cluster.md).
+
+Failover: with writers running, kill -9 of the etcd leader; the figure is the
+time from the kill to the first ack of a write sent after it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import contextlib
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+from _harness import free_port, percentile
+from rdflib import Literal, URIRef
+from rdflib.namespace import OWL, RDF
+
+from space import SpaceError, TripleSpace
+from space.store.etcd_client import EtcdClient
+from space.store.etcd_member import LocalCluster
+
+LEVEL = URIRef("https://w3id.org/tspace/selfconfig#batteryLevel")
+
+
+@contextlib.contextmanager
+def replicas(cluster: LocalCluster, workdir: Path, n: int = 3) -> Iterator[list[str]]:
+    """Run `n` replicas of `cluster`; yield their routers' endpoints; stop them after."""
+    endpoints = [f"tcp/127.0.0.1:{free_port()}" for _ in range(n)]
+    members = ",".join(cluster.endpoints)
+    procs = []
+    for i, endpoint in enumerate(endpoints):
+        data = workdir / f"replica{i}"
+        cmd = [sys.executable, "-m", "space.cli", "serve", "--listen", endpoint]
+        cmd += ["--data", str(data), "--cluster", members]
+        log = open(workdir / f"replica{i}.log", "wb")
+        procs.append((subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT), log))
+    try:
+        for endpoint in endpoints:
+            _wait_answers(endpoint)
+        yield endpoints
+    finally:
+        for proc, _ in procs:
+            proc.send_signal(signal.SIGTERM)
+        for proc, log in procs:
+            try:
+                proc.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+            log.close()
+
+
+def _wait_answers(endpoint: str, timeout: float = 30) -> None:
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            with TripleSpace.open(endpoint, space="ping") as ts:
+                ts.snapshot(timeout=1)
+            return
+        except SpaceError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.1)
+
+
+def write(
+    handles: list[TripleSpace], seconds: float, inflight: int, acks: list, first: int = 0
+) -> int:
+    """Keep `inflight` writes in flight for `seconds`; record (sent, acked); return failures."""
+    flying: collections.deque = collections.deque()
+    failures = 0
+    stop = time.monotonic() + seconds
+    n = first
+    while time.monotonic() < stop or flying:
+        while time.monotonic() < stop and len(flying) < inflight:
+            r = n % inflight  # a robot talks to its own host's replica
+            ts = handles[r % len(handles)]
+            robot = URIRef(f"http://ex.org/robot{r}")
+            cs = ts.changeset([(robot, LEVEL, Literal(n))])
+            flying.append((time.monotonic(), ts.send_later(cs, timeout=5)))
+            n += 1
+        sent, pending = flying.popleft()
+        try:
+            pending.result()
+            acks.append((sent, time.monotonic()))
+        except SpaceError:
+            failures += 1
+    return failures
+
+
+def throughput(endpoints: list[str], seconds: float, inflight: int) -> dict[str, float]:
+    handles = [TripleSpace.open(e, space="bench", agent="bench") for e in endpoints]
+    try:
+        handles[0].write([(LEVEL, RDF.type, OWL.FunctionalProperty)])
+        write(handles, 1.0, inflight, [])  # warm up
+        acks: list[tuple[float, float]] = []
+        began = time.monotonic()
+        failures = write(handles, seconds, inflight, acks, first=10**6)
+        elapsed = time.monotonic() - began
+        latencies = [(b - a) * 1e3 for a, b in acks]
+        return {
+            "rate": len(acks) / elapsed,
+            "p50": percentile(latencies, 50),
+            "p99": percentile(latencies, 99),
+            "failed": failures,
+            "latencies": latencies,  # type: ignore[dict-item]
+        }
+    finally:
+        for h in handles:
+            h.close()
+
+
+def failover(cluster: LocalCluster, endpoints: list[str], inflight: int) -> float:
+    """Return seconds from kill -9 of etcd's leader to the first ack of a write sent after."""
+    handles = [TripleSpace.open(e, space="bench", agent="bench") for e in endpoints]
+    try:
+        acks: list[tuple[float, float]] = []
+        import threading
+
+        writer = threading.Thread(target=write, args=(handles, 6.0, inflight, acks, 2 * 10**6))
+        writer.start()
+        time.sleep(1.5)
+        leader = asyncio.run(_leader(cluster.endpoints))
+        killed = time.monotonic()
+        cluster.kill(cluster.members[leader].name)
+        writer.join()
+        after = [acked for sent, acked in acks if sent >= killed]
+        return min(after) - killed if after else float("inf")
+    finally:
+        for h in handles:
+            h.close()
+
+
+async def _leader(endpoints: list[str]) -> int:
+    client = EtcdClient(endpoints)
+    await client.open()
+    try:
+        leader = await client.leader()
+        assert leader is not None, "no etcd leader to kill"
+        return leader
+    finally:
+        await client.close()
+
+
+def embedded_once(seconds: float, inflight: int) -> dict[str, float]:
+    """The same writers against one embedded store (`tspace serve`, no etcd), for reference."""
+    from _harness import serve_process
+
+    with serve_process() as (endpoint, _pid):
+        return throughput([endpoint], seconds, inflight)
+
+
+def run_once(workdir: Path, seconds: float, inflight: int) -> dict[str, float]:
+    """One run: fresh etcd and replicas; throughput, then failover."""
+    with LocalCluster(workdir / "etcd") as cluster:
+        with replicas(cluster, workdir) as endpoints:
+            result = throughput(endpoints, seconds, inflight)
+            result["failover"] = failover(cluster, endpoints, inflight)
+    return result

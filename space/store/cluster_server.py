@@ -1,0 +1,383 @@
+"""A store replica on an etcd cluster (`tspace serve --cluster`): the Zenoh side of it.
+
+Every replica serves writes, takes and reads of every space; there is no
+leader of ours (etcd's is the only one). Zenoh callbacks only enqueue; one
+worker thread decides, applies and answers (`cluster_writer`), reads run on
+reader threads once the replica applied what etcd had committed when they
+arrived (`ClusterNode.barrier`), so a read sees every acknowledged write, on
+any replica. On a minority side the barrier fails and the read is refused
+with "no quorum: ...", unless the request asks for possibly stale answers
+(`"stale": true`, `tspace query --stale`).
+
+Each replica publishes each space's sequence number (the heartbeat, as the
+embedded store does) and its view of the cluster on `@cluster/NODE`
+(members reachable, revision applied), for `tspace up`'s view and the HMI.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import queue
+import socket
+import threading
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import zenoh
+
+from space import keys
+from space.changeset import pack, unpack
+from space.errors import MalformedPayload, QueryError, SpaceError
+from space.store import intake, queries
+from space.store.cluster_db import applied_revision, space_seqs
+from space.store.cluster_keys import ROOT as ETCD_ROOT
+from space.store.cluster_node import ClusterNode
+from space.store.cluster_state import ClusterSpace
+from space.store.cluster_writer import ClusterWriter
+from space.store.db import StoreDB
+from space.store.guard import WriteGuard, writer_of
+from space.store.publish import Publisher
+from space.store.readers import Readers
+from space.store.writer import Request, answer, reject
+
+log = logging.getLogger("tspace.store")
+
+HEARTBEAT = 0.5  # seconds between publications of each space's seq and of the quorum
+_BATCH = 256
+
+
+def node_name(data_dir: Path) -> str:
+    """Return a replica's stable name: its host and a digest of its data directory."""
+    where = hashlib.blake2b(str(data_dir.resolve()).encode(), digest_size=4).hexdigest()
+    return f"{socket.gethostname()}-{where}"
+
+
+def cluster_key(root: str, node: str = "*") -> str:
+    """Return the Zenoh key where replica `node` publishes its view of the cluster."""
+    return f"{root}/@cluster/{node}"
+
+
+class ClusterStoreServer:
+    """Serve every space as one replica of an etcd cluster.
+
+    Construct, `start()`, `close()`; the Zenoh session belongs to the caller.
+
+    Raises (from `start`):
+        DataDirInUse: another store has the data directory open.
+    """
+
+    def __init__(
+        self,
+        session: zenoh.Session,
+        data_dir: Path,
+        endpoints: Sequence[str],
+        *,
+        durable: bool = False,
+        log_keep: int = 100_000,
+        root: str = keys.ROOT,
+        etcd_root: bytes = ETCD_ROOT,
+        query_timeout: float = 10.0,
+        query_slots: int = 16,
+        max_spaces: int = 10_000,
+        guard: WriteGuard | None = None,
+        name: str | None = None,
+    ) -> None:
+        self.session, self.data_dir, self.root = session, data_dir, root
+        self.endpoints = list(endpoints)
+        self.name = name or node_name(data_dir)
+        self.durable, self.log_keep, self.max_spaces = durable, log_keep, max_spaces
+        self.etcd_root, self.guard = etcd_root, guard
+        self.quorum = (0, len(self.endpoints))  # (members reachable, members), last probe
+        self._queue: queue.SimpleQueue = queue.SimpleQueue()
+        self._spaces: dict[str, ClusterSpace] = {}
+        self._readers = Readers(limit=query_timeout, slots=query_slots)
+        self._publisher = Publisher(session, root)
+        self._db: StoreDB | None = None
+        self._node: ClusterNode | None = None
+        self._writer: ClusterWriter | None = None
+        self._worker: threading.Thread | None = None
+        self._declared: list = []
+        self._probing = False
+
+    def start(self) -> None:
+        """Open the database, connect to etcd (resuming at the revision applied), serve."""
+        db = self._db = StoreDB(self.data_dir, durable=self.durable, log_keep=self.log_keep)
+        revision = applied_revision(db)
+        put = self._queue.put
+        self._node = ClusterNode(
+            self.endpoints,
+            node=self.name,
+            revision=revision,
+            apply=lambda r, batches: put(("apply", r, batches)),
+            relist=lambda listing: put(("relist", listing)),
+            seqs=space_seqs(db),
+            root=self.etcd_root,
+        )
+        self._writer = ClusterWriter(
+            self.session,
+            db,
+            self._node,
+            root=self.etcd_root,
+            events=self._queue,
+            spaces=self._spaces,
+            space=self._space,
+            publisher=self._publisher,
+            max_spaces=self.max_spaces,
+            guard=self.guard,
+        )
+        self._writer.revision = revision
+        for name in db.spaces():
+            self._space(name)
+        self._node.start()
+        self._worker = threading.Thread(target=self._run, name="tspace-replica", daemon=True)
+        self._worker.start()
+        self._declared = self._declare()
+        log.info(
+            "replica %s of etcd %s: %d space(s) from %s, at revision %d",
+            self.name,
+            ",".join(self.endpoints),
+            len(self._spaces),
+            db.path,
+            revision,
+        )
+
+    def close(self) -> None:
+        """Stop serving and applying, finish queued work, close etcd and the database."""
+        for d in self._declared:
+            d.undeclare()
+        self._declared = []
+        if self._worker is not None:
+            self._queue.put(None)
+            self._worker.join()
+            self._worker = None
+        if self._node is not None:
+            self._node.close()
+            self._node = None
+        self._readers.close()
+        self._publisher.close()
+        if self._db is not None:
+            self._db.close()
+            self._db = None
+
+    def _declare(self) -> list:
+        # complete=True: a client's request goes to one replica (the nearest), not to all.
+        root, s = self.root, self.session
+
+        def q(key: str, kind: str) -> zenoh.Queryable:
+            return s.declare_queryable(key, self._on_query(kind), complete=True)
+
+        return [
+            q(f"{root}/*/@/write", "write"),
+            q(f"{root}/*/@/write/*", "write"),
+            s.declare_subscriber(f"{root}/*/@/write", self._on_sample("write")),
+            s.declare_subscriber(f"{root}/*/@/write/*", self._on_sample("write")),
+            q(f"{root}/*/@/query", "query"),
+            q(f"{root}/*/@/query/*", "query"),
+            q(f"{root}/*/@/log", "log"),
+            q(f"{root}/*/{keys.ASSERTED}/**", "keys"),
+            q(f"{root}/*/{keys.INFERRED}/**", "keys"),
+            q(f"{root}/@repl/spaces", "spaces"),
+            # As the embedded store's: subscribers catch up from the log when it comes back.
+            s.liveliness().declare_token(f"{root}/@leader/{s.zid()}"),
+        ]
+
+    def _on_query(self, kind: str) -> Callable[[zenoh.Query], None]:
+        def callback(query: zenoh.Query) -> None:
+            key = str(query.key_expr)
+            payload = query.payload.to_bytes() if query.payload is not None else None
+            self._queue.put(Request(kind, key.split("/")[1], payload, query, key, writer_of(key)))
+
+        return callback
+
+    def _on_sample(self, kind: str) -> Callable[[zenoh.Sample], None]:
+        def callback(sample: zenoh.Sample) -> None:
+            key = str(sample.key_expr)
+            payload = sample.payload.to_bytes()
+            self._queue.put(
+                Request(kind, key.split("/")[1], payload, key=key, writer=writer_of(key))
+            )
+
+        return callback
+
+    # The worker.
+
+    def _run(self) -> None:
+        next_beat = time.monotonic()
+        while True:
+            if time.monotonic() >= next_beat:
+                self._heartbeat()
+                next_beat = time.monotonic() + HEARTBEAT
+            try:
+                item = self._queue.get(timeout=max(0.0, next_beat - time.monotonic()))
+            except queue.Empty:
+                continue
+            batch = [item]
+            while item is not None and len(batch) < _BATCH:
+                try:
+                    item = self._queue.get_nowait()
+                except queue.Empty:
+                    break
+                batch.append(item)
+            if not self._handle(batch):
+                return
+
+    def _handle(self, batch: list) -> bool:
+        writer = self._writer
+        assert writer is not None
+        reads: list[Request] = []
+        going = True
+        for item in batch:
+            if item is None:
+                going = False
+            elif isinstance(item, tuple):
+                self._event(item)
+            elif item.kind == "write" or (item.kind == "query" and _op(item.payload) == "take"):
+                self._decide(item, 1)
+            elif item.kind == "spaces":
+                answer(item, {n: s.seq for n, s in self._spaces.items() if s.seq})
+            elif item.kind in ("query", "log", "keys"):
+                if item.kind == "query" and _stale(item):
+                    self._read(item)
+                else:
+                    reads.append(item)
+        try:
+            writer.apply_pending()
+        except Exception as exc:  # a bug: stop taking writes rather than diverge silently
+            log.exception("replica failed to apply the log: refusing writes; restart it")
+            writer.failed = f"internal error while applying: {type(exc).__name__}: {exc}"
+        if reads:
+            writer.ask_barrier(("reads", reads))
+        return going
+
+    def _event(self, item: tuple) -> None:
+        """Handle what etcd's thread or a barrier put on the queue."""
+        writer = self._writer
+        assert writer is not None
+        kind = item[0]
+        if kind == "redecide":
+            req, attempt, followers = item[1]
+            for r in (req, *followers):
+                self._decide(r, attempt)
+        elif kind == "reads":
+            for r in item[1]:
+                self._read(r)
+        else:
+            try:
+                writer.event(item)
+            except Exception as exc:  # a bug: stop taking writes rather than diverge silently
+                log.exception("replica failed on a %s event: refusing writes; restart it", kind)
+                writer.failed = f"internal error: {type(exc).__name__}: {exc}"
+
+    def _decide(self, req: Request, attempt: int) -> None:
+        writer = self._writer
+        assert writer is not None
+        try:
+            if req.kind == "write":
+                writer.write(req, attempt)
+            else:
+                writer.take(req, attempt)
+        except (SpaceError, ValueError) as exc:
+            reject(req, exc)
+        except Exception as exc:  # a bug must not stop the replica nor leave a caller waiting
+            log.exception("replica failed on a %s request for %r", req.kind, req.space)
+            reject(req, QueryError(f"internal error: {type(exc).__name__}: {exc}"))
+
+    def _read(self, req: Request) -> None:
+        """Hand a read to a reader thread (the replica applied what etcd had committed)."""
+        try:
+            self._submit(req)
+        except (SpaceError, ValueError) as exc:
+            reject(req, exc)
+
+    def _submit(self, req: Request) -> None:
+        assert req.query is not None and self._db is not None
+        db, root, query = self._db, self.root, req.query
+        if req.kind == "keys":
+            spaces = self._key_spaces(req.key)
+            self._readers.submit(
+                query, req.key, lambda _d: queries.key_get(db, spaces, query, root)
+            )
+            return
+        space = keys.check_space(req.space)
+        if req.kind == "log":
+            first, last = intake.log_request(req.payload or b"", 2**62)
+            self._readers.submit(
+                query, req.key, lambda _d: queries.log_entries(db, space, first, last)
+            )
+            return
+        read = intake.query_request(req.payload or b"")
+        if read.op == "sparql":
+            job = lambda d: queries.sparql(db, space, read.text, d)  # noqa: E731
+        else:
+            job = lambda d: queries.read(db, space, read, d)  # noqa: E731
+        self._readers.submit(query, req.key, job, read.limit)
+
+    def _key_spaces(self, key: str) -> list[str]:
+        chunk = key.split("/")[1]
+        if "*" not in chunk and "$" not in chunk:
+            return [keys.check_space(chunk)]
+        selector = zenoh.KeyExpr(key)
+        return [
+            n for n in self._spaces if selector.intersects(zenoh.KeyExpr(f"{self.root}/{n}/**"))
+        ]
+
+    def _space(self, name: str) -> ClusterSpace:
+        state = self._spaces.get(name)
+        if state is None:
+            assert self._db is not None
+            state = self._spaces[name] = ClusterSpace(name, self._db)
+        return state
+
+    def _heartbeat(self) -> None:
+        """Publish each space's seq and this replica's view of the cluster; probe the members."""
+        for name, state in self._spaces.items():
+            if state.seq:
+                self.session.put(keys.service_key(name, "seq", self.root), pack({"seq": state.seq}))
+        reachable, members = self.quorum
+        writer = self._writer
+        status = {
+            "node": self.name,
+            "members": members,
+            "reachable": reachable,
+            "quorum": reachable > members // 2,
+            "revision": writer.revision if writer else 0,
+        }
+        self.session.put(cluster_key(self.root, self.name), pack(status))
+        if not self._probing and self._node is not None:
+            self._probing = True
+            self._node.reachable().add_done_callback(self._probed)
+
+    def _probed(self, future) -> None:  # noqa: ANN001 (a concurrent future, etcd's thread)
+        self._probing = False
+        if future.cancelled() or future.exception() is not None:
+            return
+        before = self.quorum
+        self.quorum = (future.result(), len(self.endpoints))
+        had, has = before[0] > before[1] // 2, self.quorum[0] > self.quorum[1] // 2
+        if had != has:
+            level = logging.INFO if has else logging.WARNING
+            log.log(
+                level,
+                "%s quorum: %d of %d members reachable",
+                "back in" if has else "no",
+                *self.quorum,
+            )
+
+
+def _op(payload: bytes | None) -> object:
+    try:
+        wire = unpack(payload or b"")
+    except MalformedPayload:
+        return None
+    return wire.get("op") if isinstance(wire, dict) else None
+
+
+def _stale(req: Request) -> bool:
+    """Return whether a read asks for possibly stale answers (no barrier: works without quorum)."""
+    try:
+        wire = unpack(req.payload or b"")
+    except MalformedPayload:
+        return False
+    return isinstance(wire, dict) and wire.get("stale") is True
