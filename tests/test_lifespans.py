@@ -158,3 +158,53 @@ def test_a_launch_file_gives_an_agent_its_lifespan(tmp_path) -> None:
     path.write_text('[[agent]]\nname = "hw_monitor"\nlifespan = "-1s"\n')
     with pytest.raises(InputError, match="agent hw_monitor: a lifespan"):
         read_launch(path)
+
+
+def test_an_expired_lease_left_on_disk_never_leases_its_triple_again(tmp_path) -> None:
+    """The retraction leaves its lease quads to collect later; they must mean nothing."""
+    import pyoxigraph as ox
+
+    from space.store.db import StoreDB
+    from space.store.intake import WriteRequest
+    from space.store.lifespans import Leases, remaining, retractions
+    from space.store.state import SpaceState
+
+    db = StoreDB(tmp_path / "data")
+    leases = Leases()
+    state = SpaceState("s", db)
+    state.leases = leases
+    t = (ox.NamedNode(str(AC.a)), ox.NamedNode(str(AC.p)), ox.Literal("x"))
+    u = (ox.NamedNode(str(AC.a)), ox.NamedNode(str(AC.q)), ox.Literal("y"))
+
+    def commit(write: WriteRequest | None = None, net=None) -> None:
+        if write is not None:
+            net, _ = state.decide(write, f"stamp-{write.id}")
+        db.commit([net.entry] if net else [], leases.take_changes())
+        state.settle()
+
+    def reloaded() -> Leases:
+        again = Leases()
+        again.load(db)
+        return again
+
+    try:
+        commit(WriteRequest(id="w1", agent="a", added=[t, u], lifespan=0.01))
+        [(_state, net)] = retractions(leases, lambda _n: state, lambda: "stamp-x", time.time() + 1)
+        commit(net=net)
+        assert not db.has("s", "t", t) and not db.has("s", "t", u)
+        assert len(leases) == 0 and len(leases.garbage) == 2  # lease quads still on disk
+        assert leases.has_garbage("s") and not leases.has_garbage("other")
+        after_restart = reloaded()
+        assert len(after_restart) == 0 and len(after_restart.garbage) == 2
+        assert after_restart.next_due() is None  # nothing to expire again
+
+        commit(WriteRequest(id="w2", agent="a", added=[t]))  # asserted again, permanent
+        assert remaining(db, "s", t, time.time()) is None
+        after_restart = reloaded()
+        assert len(after_restart) == 0 and list(after_restart.garbage) == [("s", u)]
+
+        assert leases.collect(10) == 1  # the last one, deleted in a commit of its own
+        commit()
+        assert not leases.garbage and not reloaded().garbage and not leases.has_garbage("s")
+    finally:
+        db.close()

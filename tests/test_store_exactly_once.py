@@ -95,7 +95,7 @@ def test_writes_retried_across_store_kills_are_applied_once(tmp_path):
             writer.join(180)
             assert len(acked) == 300
             seq = ts.snapshot(timeout=30)[1]
-            log, _ = ts._fetch_log(1, seq)  # (payloads, the seq the store answered at)
+            log, _ = ts._fetch_log(1, seq)  # (payloads, seq) since scoped subscriptions
             ids = Counter(Changeset.decode(p).id for p in log)
             assert set(ids) == set(acked), "every acknowledged write is in the log"
             assert max(ids.values()) == 1, "a write was applied twice"

@@ -8,14 +8,17 @@ its expiry) loses its lease.
 
 On disk a lease is the triple itself in the graph
 `urn:tspace:lease:<space>:<expiry in ms>:<write id, percent-encoded>`, committed in
-the same SPARQL update as the changeset that decided it: after `kill -9` the
-leases are exactly those of the triples held, and `load` finds them again
-(those whose time passed during the outage are due at once).
+the same SPARQL update as the changeset that decided it. A lease quad counts
+only while its triple is asserted: an expiry leaves its lease quads behind
+(`garbage`, deleted later by `collect`: with the retraction they tripled its
+commit), and a triple asserted again has its old one deleted in that commit.
+After `kill -9`, `load` finds the leases of the triples held (those whose
+time passed during the outage are due at once).
 
 In memory, one group per leasing write (its triples still leased by it) in a
 heap by expiry time; `due` hands the writer thread the groups whose time has
-come, a bounded number of triples per turn, so a mass expiry is spread over
-turns and never holds the writes queued behind it. Each group becomes one
+come, a bounded cost per turn (one write while requests come in), so a mass
+expiry is spread over turns and never holds the writes queued behind it. Each group becomes one
 changeset retracting its triples, attributed to the store, naming the write
 that expired (`cause`). Because the expiry is an ordinary changeset decided
 by the one writer, a replicated log would order it like any other write (see
@@ -56,6 +59,9 @@ LEASE = "urn:tspace:lease:"
 BUDGET = 64
 BUSY = 1
 CHANGESET = 16
+# Lease quads left behind by expiries, deleted a few at a time between writes (see `collect`).
+GARBAGE = 256  # a turn of them when no request comes in
+GARBAGE_BUSY = 16  # while requests come in
 
 _Group = tuple[str, float, str]  # space, expiry (unix seconds), write id
 
@@ -85,6 +91,28 @@ class Leases:
         self._order = itertools.count()
         self._changes: dict[ox.Quad, bool] = {}  # lease quads to insert (True) or delete
         self._per_space: dict[str, int] = {}  # leased triples
+        # Lease quads of triples retracted on expiry, still on disk: deleting them with the
+        # retraction would triple its commit, so `collect` deletes them later. A lease quad
+        # whose triple is not asserted means nothing (`load` skips it).
+        self.garbage: dict[tuple[str, OxTriple], _Group] = {}
+        self._garbage_in: dict[str, int] = {}  # space -> how many of `garbage` are its
+
+    def has_garbage(self, space: str) -> bool:
+        """Return whether a space has lease quads left to collect.
+
+        Any way of asserting triples other than `decide` (a fast path for plain
+        writes) must not be taken then: a triple asserted again must have its old
+        lease quad deleted in the same commit (`decide` does it).
+        """
+        return self._garbage_in.get(space, 0) > 0
+
+    def _discard(self, space: str, t: OxTriple, group: _Group) -> None:
+        """Make a lease quad garbage: its triple is retracted, the quad is still on disk."""
+        self.garbage[(space, t)] = group
+        self._garbage_in[space] = self._garbage_in.get(space, 0) + 1
+
+    def _collected(self, space: str) -> None:
+        self._garbage_in[space] -= 1
 
     def __len__(self) -> int:
         return len(self._held)
@@ -103,7 +131,11 @@ class Leases:
             if group is None:
                 continue
             for q in db.store.quads_for_pattern(None, None, None, g):
-                self._lease(group, (q.subject, q.predicate, q.object))
+                t = (q.subject, q.predicate, q.object)
+                if db.has(group[0], "t", t):
+                    self._lease(group, t)
+                else:  # retracted on expiry, its lease quad not collected yet
+                    self._discard(group[0], t, group)
         if self._held:
             log.info("%d leased triple(s) in %d write(s)", len(self._held), len(self._groups))
 
@@ -125,6 +157,10 @@ class Leases:
         group = (space, time.time() + lifespan, request) if lifespan else None
         for t in asserted:
             self._release(space, t)
+            stale = self.garbage.pop((space, t), None)
+            if stale is not None:  # asserted again: its old lease quad goes in this commit
+                self._changes[_quad(stale, t)] = False
+                self._collected(space)
             if group is not None:
                 self._lease(group, t)
                 self._changes[_quad(group, t)] = True
@@ -145,19 +181,34 @@ class Leases:
 
         Each write costs its triples plus `CHANGESET`; the first is returned whatever its size.
 
-        Their leases are released here: the changesets retracting them are
-        committed with the release of their lease quads.
+        Their leases are released here; their lease quads become `garbage`,
+        deleted later by `collect` (not with the retraction: that is its cost).
         """
         found: list[tuple[_Group, list[OxTriple]]] = []
         count = 0
         while count < budget and self.next_due() is not None and self._heap[0][0] <= now:
             group = heapq.heappop(self._heap)[2]
-            triples = list(self._groups.get(group, ()))
+            triples = list(self._groups.pop(group, ()))
             for t in triples:
-                self._release(group[0], t)
+                del self._held[(group[0], t)]
+                self._per_space[group[0]] -= 1
+                self._discard(group[0], t, group)
             found.append((group, triples))
             count += len(triples) + CHANGESET
         return found
+
+    def collect(self, count: int) -> int:
+        """Queue the deletion of up to `count` garbage lease quads with the next commit.
+
+        Returns how many were queued.
+        """
+        taken = 0
+        while self.garbage and taken < count:
+            (space, t), group = self.garbage.popitem()
+            self._changes[_quad(group, t)] = False
+            self._collected(space)
+            taken += 1
+        return taken
 
     def _lease(self, group: _Group, t: OxTriple) -> None:
         if (group[0], t) not in self._held:

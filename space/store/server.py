@@ -268,6 +268,8 @@ class StoreServer:
         try:
             self._writer.expire(pending, lifespans.BUSY if busy else lifespans.BUDGET)
             self._writer.commit(pending)  # a failed commit: the writer refuses writes, says why
+            if not pending:  # nothing due: delete a few lease quads left by expiries
+                self._writer.collect(lifespans.GARBAGE_BUSY if busy else lifespans.GARBAGE)
         except Exception:  # a bug must not stop the store
             log.exception("store failed sweeping expired writes")
 
@@ -276,7 +278,12 @@ class StoreServer:
         return due is not None and due < time.time() - OVERDUE
 
     def _expiry_wait(self) -> float:
-        """Return the seconds until the next lease expires (a heartbeat if none)."""
+        """Return the seconds until the next lease expires (a heartbeat if none).
+
+        No wait while lease quads left by expiries remain to delete (a turn of them each).
+        """
+        if self._leases.garbage and not self._writer.failed:
+            return 0.0
         due = self._leases.next_due()
         if due is None:
             return HEARTBEAT

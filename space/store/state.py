@@ -77,7 +77,9 @@ class SpaceState:
         """
         if req.plain is None or self._overlay or req.lifespan:
             return False
-        if self.leases is not None and self.leases.holds(self.name):
+        if self.leases is not None and (
+            self.leases.holds(self.name) or self.leases.has_garbage(self.name)
+        ):
             return False
         predicates = {row[1] for row in req.plain}
         if _TYPE_TEXT in predicates and any(

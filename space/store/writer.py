@@ -241,6 +241,15 @@ class Writer:
         for state, net in retractions(self._leases, self._space, stamp, time.time(), budget):
             pending.append(Pending(Request("expire", state.name, None), state, net, _no_reply))
 
+    def collect(self, count: int) -> None:
+        """Delete up to `count` lease quads left by expiries, in a commit of their own."""
+        if self.failed or self._leases is None or not self._leases.collect(count):
+            return
+        try:
+            self.db.commit([], self._leases.take_changes())
+        except CommitFailed as exc:
+            self._fail(exc, [])
+
     def probe(self, busy: int) -> None:
         """After a failed commit, try an empty one now and then; writes resume once one works.
 
