@@ -180,6 +180,31 @@ class TripleSpace(Reads, Watching):
         """
         return Pending(self.session, self._key("write"), cs.encode(), timeout, what="write")
 
+    def send_rows_later(
+        self,
+        added: list[list[str]],
+        *,
+        prefixes: dict[str, str] | None = None,
+        lifespan: float | None = None,
+        timeout: float = 5.0,
+    ) -> tuple[str, Pending]:
+        """Send triples given as `[s, p, o]` N-Triples texts as one changeset; ack read later.
+
+        The bulk twin of `send_later`, for texts a parser made already (`tspace
+        write` of a big document): no rdflib term is made. `lifespan` as in
+        `changeset`. Returns the changeset's id and its pending reply
+        (`Ack.of(id, pending.result())`).
+        """
+        life = self.lifespan if lifespan is None else lifespan
+        cs = Changeset(
+            agent=self.agent,
+            timestamp=str(self.session.new_timestamp()),
+            prefixes=dict(prefixes or {}),
+            lifespan=check_lifespan(life) or None,
+        )
+        payload = cs.encode([added, [], [], []])
+        return cs.id, Pending(self.session, self._key("write"), payload, timeout, what="write")
+
     def send_nowait(self, cs: Changeset) -> str:
         """Send a changeset without waiting (fire-and-forget twin of `send`); return its id."""
         self.session.put(

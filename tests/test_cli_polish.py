@@ -88,9 +88,9 @@ def test_a_big_document_says_how_far_it_is(lone_server, tmp_path):
     # Long literals: over 1 MB in few triples, so that parsing stays quick on a busy machine.
     big.write_text("".join(f'<urn:s{i}> <urn:p> "{i:0>100}" .\n' for i in range(10_000)))
     size = big.stat().st_size / 1e6
-    out = tspace(
-        "write", str(big), "--connect", lone_server.endpoint, "--space", "big", "--timeout", "30"
-    )
+    # --atomic: one changeset, all or nothing (without it, tests/test_cli_bulk.py)
+    connect = ("--connect", lone_server.endpoint, "--space", "big", "--timeout", "30")
+    out = tspace("write", str(big), "--atomic", *connect)
     assert out.returncode == 0, out.stderr
     lines = out.stderr.splitlines()
     assert lines[0] == f"tspace write: reading {big} ({size:.1f} MB)…", lines

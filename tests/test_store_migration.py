@@ -63,7 +63,7 @@ def test_an_old_data_directory_is_migrated_with_its_state_log_and_seq(tmp_path: 
             assert len(graph) == 4
             assert len(ts.query("?b ac:battery_level 'low'")) == 1  # prefixes came along
             assert len(ts.query(None, graph="inferred")) == 1
-            assert [Changeset.decode(p).id for p in ts._fetch_log(1, 3)] == ["cs1", "cs2", "cs3"]
+            assert [Changeset.decode(p).id for p in ts._fetch_log(1, 3)[0]] == ["cs1", "cs2", "cs3"]
             # the functional property and its timestamp came along: an older value loses
             ack = ts.send(ts.changeset([(AC.b1, AC.battery_level, Literal("high"))]))
             assert ack.seq == 4 and ack.dropped == []

@@ -1,4 +1,7 @@
-"""`tspace write`: write (and/or remove) the triples of Turtle documents as one changeset."""
+"""`tspace write`: write (and/or remove) the triples of Turtle documents as one changeset.
+
+A big document (1 MB and more) is streamed as several changesets instead (`bulk.py`).
+"""
 
 from __future__ import annotations
 
@@ -15,8 +18,9 @@ if TYPE_CHECKING:
     from rdflib import Graph
 
 ORDER = 30
-PROGRESS_BYTES = 1_000_000  # documents from this size on get a progress line as they are read
+PROGRESS_BYTES = 1_000_000  # documents from this size on are streamed, with progress lines
 PROGRESS_TRIPLES = 10_000  # changesets from this size on: the store takes seconds; say so
+CHUNK = 10_000  # triples per changeset of a streamed document (bulk.py)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -28,12 +32,21 @@ def register(sub: argparse._SubParsersAction) -> None:
         "with --remove, remove those of another in the same changeset. Prints the changeset id; "
         "each added triple the store did not apply (a functional property holding a newer value) "
         "is printed on stderr with its reason, and with --strict makes the exit code 1. "
-        "A document with no triples is an error (nothing is written); big ones get progress "
-        "lines on stderr (reading 1 MB and more, sending 10,000 triples and more).",
+        "A document with no triples is an error (nothing is written). A document of 1 MB and "
+        "more (without --remove) is checked whole, then sent as changesets of "
+        f"{CHUNK:,} triples, several in flight, with progress lines on stderr, and one id per "
+        "changeset on stdout: each changeset is applied whole, the document is not (--atomic). "
+        "One changeset of 10,000 triples and more gets progress lines too.",
     )
     p.add_argument("file", nargs="?", metavar="FILE|-", help="Turtle document to add")
     p.add_argument("--remove", metavar="FILE|-", help="Turtle document whose triples to remove")
     p.add_argument("--strict", action="store_true", help="exit 1 when some triple was not applied")
+    p.add_argument(
+        "--atomic",
+        action="store_true",
+        help="send a big document as one changeset too: all of it or nothing "
+        "(at most 100,000 triples, the store's limit)",
+    )
     p.add_argument(
         "--lifespan",
         type=_lifespan,
@@ -61,6 +74,10 @@ def run(args: argparse.Namespace) -> int:
     if args.file is None and args.remove is None:
         raise UsageError("give a FILE to add and/or --remove FILE")
     make_config(connect=args.connect, config_file=args.config)  # a bad endpoint: say it first
+    if args.file and args.remove is None and _size(args.file) >= PROGRESS_BYTES:
+        if not args.atomic:
+            return _stream(args)
+        _fits(args.file)
     added = _read(args.file) if args.file else None
     removed = _read(args.remove) if args.remove else None
     for source, graph in ((args.file, added), (args.remove, removed)):
@@ -88,6 +105,54 @@ def run(args: argparse.Namespace) -> int:
         s, p, o = (term.n3() for term in dropped.triple)
         print(f"tspace: not applied: {s} {p} {o} .: {dropped.reason}", file=sys.stderr)
     return 1 if ack.dropped and args.strict else 0
+
+
+def _fits(source: str) -> None:
+    """Refuse, before anything is sent, a document too big for one changeset.
+
+    Raises:
+        InputError: more triples than a changeset holds, or not Turtle.
+    """
+    from space.cli import bulk
+    from space.errors import InputError
+    from space.store.intake import MAX_TRIPLES
+
+    total, _ = bulk.check(source)
+    if total > MAX_TRIPLES:
+        raise InputError(
+            f"{source}: {total:,} triples, and a changeset holds at most {MAX_TRIPLES:,}: "
+            "nothing written (without --atomic it is sent as several changesets)"
+        )
+
+
+def _stream(args: argparse.Namespace) -> int:
+    """Check a big document whole, then send it as several changesets (`bulk.py`)."""
+    from space.cli import bulk
+    from space.errors import InputError
+
+    _say(f"checking {args.file} ({_size(args.file) / 1e6:.1f} MB)…")
+    started = time.monotonic()
+    total, prefixes = bulk.check(args.file)
+    if not total:
+        raise InputError(f"{args.file}: no triples in it; nothing written")
+    _say(f"{total:,} triples in {time.monotonic() - started:.1f} s; sending…")
+    with open_space(args, agent="tspace-write", create=True) as ts:
+        acks = bulk.send(
+            ts,
+            args.file,
+            total,
+            prefixes,
+            lifespan=args.lifespan or 0,
+            timeout=args.timeout,
+            say=_say,
+        )
+    for ack in acks:
+        print(ack, file=sys.stdout)
+    dropped = [d for ack in acks for d in ack.dropped]
+    for d in dropped:
+        s, p, o = (term.n3() for term in d.triple)
+        print(f"tspace: not applied: {s} {p} {o} .: {d.reason}", file=sys.stderr)
+    return 1 if dropped and args.strict else 0
 
 
 def _read(source: str) -> Graph:

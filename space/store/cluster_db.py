@@ -20,11 +20,11 @@ from space.store.db import (
     STORE,
     Entry,
     StoreDB,
-    _log_graph,
-    _operations,
     graph,
+    log_graph,
     space_node,
 )
+from space.store.render import update
 
 REVISION = ox.NamedNode("urn:tspace:revision")
 
@@ -48,10 +48,11 @@ def applied_revision(db: StoreDB) -> int:
 def space_seqs(db: StoreDB) -> dict[str, int]:
     """Return every space's sequence number as the database has it."""
     prefix = "urn:tspace:space:"
-    return {
-        q.subject.value[len(prefix) :]: int(q.object.value)
-        for q in db.store.quads_for_pattern(None, SEQ, None, META)
-    }
+    seqs: dict[str, int] = {}
+    for q in db.store.quads_for_pattern(None, SEQ, None, META):
+        name = q.subject.value[len(prefix) :]
+        seqs[name] = max(seqs.get(name, 0), int(q.object.value))  # older ones await compaction
+    return seqs
 
 
 def replace_all(
@@ -71,7 +72,7 @@ def replace_all(
     ops: list[str] = []
     for space in sorted({*images, *space_seqs(db)}):
         image = images.get(space, SpaceImage())
-        graphs = (*(graph(space, w) for w in ("t", "i", "stamps")), _log_graph(space))
+        graphs = (*(graph(space, w) for w in ("t", "i", "stamps")), log_graph(space))
         ops += [f"DROP SILENT GRAPH <{g.value}>" for g in graphs]
         node = space_node(space).value
         ops.append(f"DELETE WHERE {{ GRAPH <{META.value}> {{ <{node}> ?p ?o }} }}")
@@ -84,9 +85,9 @@ def replace_all(
         for text, stamp in image.stamps:
             for s, p, _o in _parse([text]):
                 entry.stamps_added.append((s, p, ox.Literal(stamp)))
-        # `_operations` logs the entry; a re-listed space has no log entry to give.
-        ops += [op for op in _operations(entry, fresh=True)]
-        ops.append(f"DROP SILENT GRAPH <{_log_graph(space).value}>")
+        # `update` logs the entry; a re-listed space has no log entry to give.
+        ops.append(update([entry], fresh=True))
+        ops.append(f"DROP SILENT GRAPH <{log_graph(space).value}>")
     ops += revision_ops(revision)
     try:
         db.store.update(" ;\n".join(ops))

@@ -91,6 +91,7 @@ class ClusterWriter:
 
     def write(self, req: Request, attempt: int = 1) -> None:
         write = intake.write_request(req.payload or b"")
+        write.parse_plain()  # decided term by term: in-flight decisions overlay in terms
         if write.lifespan is not None:
             raise NotInCluster(
                 "not applied: triples with a lifespan are not supported in cluster mode yet "

@@ -6,14 +6,15 @@ Layout (every IRI under `urn:tspace:`, space names being IRI-safe):
   reads their union as its default graph.
 - `graph:<space>:stamps`: for each functional `(s p)` its writer's HLC timestamp,
   as the triple `s p "<timestamp>"`, so the later-timestamp rule survives restarts.
-- `meta`: `space:<space> seq N` (the space's sequence number) and its prefixes.
+- `meta`: `space:<space> seq N` (the space's sequence number: the largest N, older
+  ones are dropped at compaction) and its prefixes.
 - `log:<space>`: per changeset `log:<space>:<seq>` with its `n`, the published
   payload (base64 msgpack), the request id it answered and what its writer was
   told was not applied.
 
 `commit` writes a batch of changesets, each with its log entry and sequence
-number, as ONE SPARQL UPDATE: Oxigraph applies an update atomically (one
-RocksDB write batch), so after `kill -9` a changeset is wholly there with its
+number, as ONE N-Quads load or SPARQL UPDATE (`render.py`): Oxigraph applies
+either atomically (one RocksDB write batch), so after `kill -9` a changeset is wholly there with its
 log entry and seq, or not at all. A commit is in RocksDB's write-ahead log,
 not fsynced: it survives the death of the process, not of the machine;
 `durable=True` (`tspace serve --fsync`) also calls `Store.flush()` before a
@@ -35,11 +36,13 @@ import pyoxigraph as ox
 
 from space.errors import SpaceError
 from space.store import oxterms
+from space.store.flusher import Flusher
 from space.store.oxterms import OxTerm, OxTriple
 
 log = logging.getLogger("tspace.store")
 
 FORMAT = "2"  # 1 was SQLite (space.sqlite3)
+COMPACT_EVERY = 1000  # commits of a space between compactions of its log and seqs
 _U = "urn:tspace:"
 META = ox.NamedNode(_U + "meta")
 SEQ = ox.NamedNode(_U + "seq")
@@ -76,7 +79,7 @@ def space_node(space: str) -> ox.NamedNode:
     return ox.NamedNode(f"{_U}space:{space}")
 
 
-def _log_graph(space: str) -> ox.NamedNode:
+def log_graph(space: str) -> ox.NamedNode:
     return ox.NamedNode(f"{_U}log:{space}")
 
 
@@ -95,6 +98,7 @@ class Entry:
     dropped: bytes = b""  # msgpack of what the writer was told was not applied (if anything)
     removed: list[OxTriple] = field(default_factory=list)
     added: list[OxTriple] = field(default_factory=list)
+    plain: list[list[str]] = field(default_factory=list)  # asserted additions, N-Triples texts
     inferred_removed: list[OxTriple] = field(default_factory=list)
     inferred_added: list[OxTriple] = field(default_factory=list)
     prefixes: dict[str, str] = field(default_factory=dict)
@@ -144,10 +148,12 @@ class StoreDB:
                 raise
             self.store = ox.Store.read_only(str(self.path))
             self.open_error = f"the database opened read-only: {exc}"
-        self._commits = 0
+        self._commits: dict[str, int] = {}  # per space, since its last compaction
+        self._flusher = Flusher(lambda: self.store if hasattr(self, "store") else None)
 
     def close(self) -> None:
         """Flush and let go of the database (the last reference closes it)."""
+        self._flusher.close()
         try:
             self.store.flush()
         except OSError as exc:
@@ -157,17 +163,18 @@ class StoreDB:
     def spaces(self) -> list[str]:
         """Return the names of the spaces that were ever written."""
         prefix = f"{_U}space:"
-        return [
+        names = (
             q.subject.value[len(prefix) :]
             for q in self.store.quads_for_pattern(None, SEQ, None, META)
-        ]
+        )
+        return list(dict.fromkeys(names))
 
     def load(self, space: str) -> Loaded:
         """Return a space's seq, prefixes, functional stamps and functional properties."""
         node = space_node(space)
         loaded = Loaded()
         for q in self.store.quads_for_pattern(node, SEQ, None, META):
-            loaded.seq = int(q.object.value)
+            loaded.seq = max(loaded.seq, int(q.object.value))  # older ones wait for compaction
         for q in self.store.quads_for_pattern(node, PREFIX, None, META):
             name, _, ns = q.object.value.partition(" ")
             loaded.prefixes[name] = ns
@@ -188,6 +195,12 @@ class StoreDB:
     def has(self, space: str, which: str, t: OxTriple) -> bool:
         """Return whether a graph (`t` or `i`) of a space holds a triple."""
         return ox.Quad(t[0], t[1], t[2], graph(space, which)) in self.store
+
+    def has_subject(self, space: str, s: OxTerm) -> bool:
+        """Return whether the asserted graph of a space holds any triple about `s`."""
+        return (
+            next(self.store.quads_for_pattern(s, None, None, graph(space, "t")), None) is not None
+        )
 
     def objects(self, space: str, s: OxTerm, p: OxTerm) -> list[OxTerm]:
         """Return the asserted objects of `(s p ?)` in a space."""
@@ -216,27 +229,32 @@ class StoreDB:
         Raises:
             CommitFailed: nothing of the batch was written.
         """
+        from space.store import render
+
         if not entries and not any(extra) and revision is None:
             return
-        ops = [op for e in entries for op in _operations(e)]
-        for verb, quads in zip(("DELETE", "INSERT"), extra, strict=True):
-            if quads:
-                ops.append(f"{verb} DATA {{ {_quads(quads)} }}")
-        if revision is not None:
-            from space.store.cluster_db import revision_ops
-
-            ops += revision_ops(revision)
-        text = " ;\n".join(ops)
         try:
-            self.store.update(text)
+            if revision is None and not extra[0] and render.plain(entries):
+                self.store.load(render.nquads(entries, extra[1]), format=ox.RdfFormat.N_QUADS)
+            else:
+                ops = [render.update(entries, extra)] if entries or any(extra) else []
+                if revision is not None:
+                    from space.store.cluster_db import revision_ops
+
+                    ops += revision_ops(revision)
+                self.store.update(" ;\n".join(ops))
             if self.durable:
                 self.store.flush()
         except (OSError, RuntimeError) as exc:
             raise CommitFailed(f"the database could not commit: {exc}") from exc
-        self._commits += len(entries)
-        if self._commits >= 1000 and entries:
-            self._commits = 0
-            self._compact({e.space: e.seq for e in entries})
+        if not self.durable:
+            self._flusher.wrote(sum(map(_size, entries)) + len(extra[1]))
+        for e in entries:
+            self._commits[e.space] = self._commits.get(e.space, 0) + 1
+        for space, seq in {e.space: e.seq for e in entries}.items():
+            if self._commits[space] >= COMPACT_EVERY:
+                self._commits[space] = 0
+                self._compact(space, seq)
 
     def probe(self) -> None:
         """Reopen the database and commit one small change: does it commit again?
@@ -250,6 +268,10 @@ class StoreDB:
         Raises:
             CommitFailed: it does not commit yet.
         """
+        with self._flusher.paused():
+            self._reopen()
+
+    def _reopen(self) -> None:
         from space.store.migrate import open_store
 
         self.store = None  # type: ignore[assignment]
@@ -267,24 +289,28 @@ class StoreDB:
                 self.store = ox.Store.read_only(str(self.path))
             raise CommitFailed(f"the database could not commit: {exc}") from exc
 
-    def _compact(self, last: dict[str, int]) -> None:
-        """Forget log entries older than the `log_keep` latest (their request ids with them)."""
-        for space, seq in last.items():
-            if seq <= self.log_keep:
-                continue
-            g = _log_graph(space).value
-            try:
-                self.store.update(
-                    f"DELETE {{ GRAPH <{g}> {{ ?e ?p ?o }} }} WHERE {{ GRAPH <{g}> "
-                    f"{{ ?e <{N.value}> ?n . FILTER(?n <= {seq - self.log_keep}) ?e ?p ?o }} }}"
-                )
-            except OSError as exc:  # the log is only longer than it should be; say so
-                log.error("could not compact the log of %s: %s", space, exc)
+    def _compact(self, space: str, seq: int) -> None:
+        """Forget a space's older sequence numbers, and log entries older than the `log_keep`
+        latest (their request ids with them)."""
+        g, m, node = log_graph(space).value, META.value, space_node(space).value
+        ops = [
+            f"DELETE {{ GRAPH <{m}> {{ <{node}> <{SEQ.value}> ?n }} }} WHERE {{ GRAPH <{m}> "
+            f"{{ <{node}> <{SEQ.value}> ?n FILTER(?n < {seq}) }} }}"
+        ]
+        if seq > self.log_keep:
+            ops.append(
+                f"DELETE {{ GRAPH <{g}> {{ ?e ?p ?o }} }} WHERE {{ GRAPH <{g}> "
+                f"{{ ?e <{N.value}> ?n . FILTER(?n <= {seq - self.log_keep}) ?e ?p ?o }} }}"
+            )
+        try:
+            self.store.update(" ;\n".join(ops))
+        except OSError as exc:  # the log is only longer than it should be; say so
+            log.error("could not compact the log of %s: %s", space, exc)
 
     def log(self, space: str, first: int, last: int) -> list[tuple[int, bytes]]:
         """Return the logged changesets `first..last` (inclusive) still kept."""
         rows = []
-        g = _log_graph(space)
+        g = log_graph(space)
         for seq in range(max(first, 1), last + 1):
             for q in self.store.quads_for_pattern(_entry(space, seq), PAYLOAD, None, g):
                 rows.append((seq, base64.b64decode(q.object.value)))
@@ -295,7 +321,7 @@ class StoreDB:
 
         `dropped` is the msgpack list the writer was told was not applied (b"" if none).
         """
-        g = _log_graph(space)
+        g = log_graph(space)
         for q in self.store.quads_for_pattern(None, REQUEST, ox.Literal(request), g):
             seq = int(q.subject.value.rsplit(":", 1)[1])
             rows = self.log(space, seq, seq)
@@ -336,6 +362,8 @@ class StoreDB:
         Raises:
             CommitFailed: nothing was written.
         """
+        from space.store import render
+
         entry = Entry(space=space, seq=last[0], request="", payload=last[1], prefixes=prefixes)
         for g, s, p, o, ts in rows:
             t = (oxterms.term(s), oxterms.term(p), oxterms.term(o))
@@ -344,22 +372,33 @@ class StoreDB:
                 entry.stamps_added.append((t[0], t[1], ox.Literal(ts)))
         clear = [
             f"DROP SILENT GRAPH <{g.value}>"
-            for g in (*(graph(space, w) for w in ("t", "i", "stamps")), _log_graph(space))
+            for g in (*(graph(space, w) for w in ("t", "i", "stamps")), log_graph(space))
         ]
         node = space_node(space).value
         clear.append(f"DELETE WHERE {{ GRAPH <{META.value}> {{ <{node}> ?p ?o }} }}")
         try:
-            self.store.update(" ;\n".join([*clear, *_operations(entry, fresh=True)]))
+            self.store.update(" ;\n".join([*clear, render.update([entry], fresh=True)]))
             self.store.flush()
         except (OSError, RuntimeError) as exc:
             raise CommitFailed(f"the database could not commit: {exc}") from exc
+
+
+def _size(e: Entry) -> int:
+    """Return the number of quads an entry writes, roughly (its triples)."""
+    return (
+        len(e.plain)
+        + len(e.added)
+        + len(e.removed)
+        + len(e.inferred_added)
+        + len(e.inferred_removed)
+    )
 
 
 def log_quads(
     space: str, seq: int, request: str, payload: bytes, dropped: bytes = b""
 ) -> list[ox.Quad]:
     """Return the quads of one log entry: its seq, payload, request id and what was dropped."""
-    entry, g = _entry(space, seq), _log_graph(space)
+    entry, g = _entry(space, seq), log_graph(space)
     quads = [
         ox.Quad(entry, N, ox.Literal(str(seq), datatype=INT), g),
         ox.Quad(entry, PAYLOAD, ox.Literal(base64.b64encode(payload).decode("ascii")), g),
@@ -369,43 +408,3 @@ def log_quads(
     if dropped:
         quads.append(ox.Quad(entry, DROPPED, ox.Literal(base64.b64encode(dropped).decode()), g))
     return quads
-
-
-def _quads(quads: list[ox.Quad]) -> str:
-    """Return quads as GRAPH blocks, one per graph (a write's leases share theirs)."""
-    by_graph: dict[str, list[str]] = {}
-    for q in quads:
-        by_graph.setdefault(str(q.graph_name), []).append(f"{q.subject} {q.predicate} {q.object}")
-    return " ".join(f"GRAPH {g} {{ {' . '.join(ts)} }}" for g, ts in by_graph.items())
-
-
-def _block(g: ox.NamedNode, triples: Iterable[OxTriple]) -> str:
-    body = " .\n".join(f"{s} {p} {o}" for s, p, o in triples)
-    return f"GRAPH <{g.value}> {{ {body} }}" if body else ""
-
-
-def _operations(e: Entry, *, fresh: bool = False) -> list[str]:
-    """Return the DELETE DATA and INSERT DATA of one entry (removals first, as in a changeset)."""
-    node = space_node(e.space)
-    deletes = [
-        _block(graph(e.space, "t"), e.removed),
-        _block(graph(e.space, "i"), e.inferred_removed),
-        _block(graph(e.space, "stamps"), e.stamps_removed),
-    ]
-    if e.seq > 1 and not fresh:
-        deletes.append(_block(META, [(node, SEQ, ox.Literal(str(e.seq - 1), datatype=INT))]))
-    meta = [(node, SEQ, ox.Literal(str(e.seq), datatype=INT))]
-    meta += [(node, PREFIX, ox.Literal(f"{n} {ns}")) for n, ns in e.prefixes.items()]
-    logged = [q.triple for q in log_quads(e.space, e.seq, e.request, e.payload, e.dropped)]
-    inserts = [
-        _block(graph(e.space, "t"), e.added),
-        _block(graph(e.space, "i"), e.inferred_added),
-        _block(graph(e.space, "stamps"), e.stamps_added),
-        _block(META, meta),
-        _block(_log_graph(e.space), logged),
-    ]
-    ops = []
-    if any(deletes):
-        ops.append("DELETE DATA { " + " ".join(d for d in deletes if d) + " }")
-    ops.append("INSERT DATA { " + " ".join(i for i in inserts if i) + " }")
-    return ops

@@ -39,6 +39,12 @@ class WriteRequest:
     inferred_added: list[OxTriple] = field(default_factory=list)
     inferred_removed: list[OxTriple] = field(default_factory=list)
     lifespan: float | None = None  # seconds the added triples live (None: permanent)
+    plain: list[list[str]] | None = None  # the additions, when only added and plain (oxterms)
+
+    def parse_plain(self) -> None:
+        """Turn plain additions into terms, for the store's term-by-term path."""
+        if self.plain is not None:
+            self.added, self.plain = oxterms.triples(self.plain), None
 
 
 @dataclass
@@ -126,8 +132,14 @@ def write_request(payload: bytes) -> WriteRequest:
         count += len(listed)
         if count > MAX_TRIPLES:
             raise MalformedPayload(f"a changeset holds at most {MAX_TRIPLES} triples")
-        lists.append(oxterms.triples(listed))
-    req.added, req.removed, req.inferred_added, req.inferred_removed = lists
+        lists.append(listed)
+    if lists[0] and not any(lists[1:]):
+        req.plain = oxterms.plain_rows(lists[0])
+        if req.plain is not None:
+            return req
+    req.added, req.removed, req.inferred_added, req.inferred_removed = (
+        oxterms.triples(listed) for listed in lists
+    )
     return req
 
 

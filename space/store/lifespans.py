@@ -90,6 +90,7 @@ class Leases:
         self._heap: list[tuple[float, int, _Group]] = []
         self._order = itertools.count()
         self._changes: dict[ox.Quad, bool] = {}  # lease quads to insert (True) or delete
+        self._per_space: dict[str, int] = {}  # leased triples
         # Lease quads of triples retracted on expiry, still on disk: deleting them with the
         # retraction would triple its commit, so `collect` deletes them later. A lease quad
         # whose triple is not asserted means nothing (`load` skips it).
@@ -115,6 +116,10 @@ class Leases:
 
     def __len__(self) -> int:
         return len(self._held)
+
+    def holds(self, space: str) -> bool:
+        """Return whether any triple of a space is leased."""
+        return self._per_space.get(space, 0) > 0
 
     def load(self, db: StoreDB) -> None:
         """Forget everything and read the leases from the database (at start, after a failure)."""
@@ -186,6 +191,7 @@ class Leases:
             triples = list(self._groups.pop(group, ()))
             for t in triples:
                 del self._held[(group[0], t)]
+                self._per_space[group[0]] -= 1
                 self._discard(group[0], t, group)
             found.append((group, triples))
             count += len(triples) + CHANGESET
@@ -205,6 +211,8 @@ class Leases:
         return taken
 
     def _lease(self, group: _Group, t: OxTriple) -> None:
+        if (group[0], t) not in self._held:
+            self._per_space[group[0]] = self._per_space.get(group[0], 0) + 1
         self._held[(group[0], t)] = group
         held = self._groups.get(group)
         if held is None:
@@ -216,6 +224,7 @@ class Leases:
         group = self._held.pop((space, t), None)
         if group is None:
             return
+        self._per_space[space] -= 1
         held = self._groups[group]
         held.discard(t)
         if not held:

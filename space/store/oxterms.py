@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import re
 from functools import lru_cache
+from itertools import chain
 
 import pyoxigraph as ox
 
@@ -115,46 +116,99 @@ def triple(parts: object) -> OxTriple:
 def triples(rows: list) -> list[OxTriple]:
     """Return the pyoxigraph triples of a list of `[s, p, o]` texts, parsed in bulk.
 
-    Each text is first matched whole as one term (so no text can carry a second
-    term, a comment or a line end into the document), then the lot is parsed by
-    Oxigraph's N-Triples parser at once. Anything it refuses is parsed again
-    term by term, for an error that names the term.
+    Raises:
+        MalformedPayload: as `triple`.
+    """
+    return parse_rows(rows)[0]
+
+
+def parse_rows(rows: list) -> tuple[list[OxTriple], bool]:
+    """Return the triples of `[s, p, o]` texts, and whether each row is its triple's own text.
+
+    The rows are joined into one N-Triples document, which one regular
+    expression checks line by line (so no text can carry a second term, a
+    comment or a line end into it) and Oxigraph's parser reads at once. Where
+    every row is plain (no escape, no language tag, no literal turned into its
+    canonical form) the rows are the texts the store publishes, and no term is
+    turned back into text. Anything refused is parsed again term by term, for
+    an error that names the term.
 
     Raises:
         MalformedPayload: as `triple`.
     """
-    if all(_well_formed(row) for row in rows):
-        document = "".join(f"{s} {p} {o} .\n" for s, p, o in rows)
+    try:
+        document = "".join([f"{s} {p} {o} .\n" for s, p, o in rows])
+    except (TypeError, ValueError):  # a row that is not three items
+        document = ""
+    if (
+        document.count("\n") == len(rows)
+        and _DOCUMENT_RE.fullmatch(document) is not None
+        and max(map(len, chain.from_iterable(rows)), default=0) <= MAX_TERM
+    ):
         try:
             quads = list(ox.parse(document, format=ox.RdfFormat.N_TRIPLES))
         except (SyntaxError, ValueError):
             quads = []
-        objects = canonical_all([_skolem(q.object) for q in quads])
-        parsed = [(_skolem(q.subject), q.predicate, o) for q, o in zip(quads, objects, strict=True)]
-        if len(parsed) == len(rows):
-            return parsed  # type: ignore[return-value]
-    return [triple(row) for row in rows]
+        if len(quads) == len(rows):
+            blank = "_:" in document
+            written = [_skolem(q.object) for q in quads] if blank else [q.object for q in quads]
+            objects = canonical_all(written)
+            plain = not blank and "\\" not in document and '"@' not in document
+            if plain and objects is not written:
+                plain = all(a == b for a, b in zip(objects, written, strict=True))
+            subjects = [_skolem(q.subject) for q in quads] if blank else [q.subject for q in quads]
+            parsed = [(s, q.predicate, o) for s, q, o in zip(subjects, quads, objects, strict=True)]
+            return parsed, plain  # type: ignore[return-value]
+    return [triple(row) for row in rows], False
 
 
-def _well_formed(row: object) -> bool:
-    if not isinstance(row, list | tuple) or len(row) != 3:
-        return False
-    if isinstance(row[1], str) and row[1].startswith("<" + SKOLEM):
-        return False
-    for t in row:
-        if not isinstance(t, str) or not t or len(t) > MAX_TERM:
-            return False
-        first = t[0]
-        match = (
-            _IRI_RE.match(t)
-            if first == "<"
-            else _LITERAL_RE.match(t)
-            if first == '"'
-            else _BNODE_RE.match(t)
-        )
-        if match is None:
-            return False
-    return True
+def plain_rows(rows: list) -> list[list[str]] | None:
+    """Return `[s, p, o]` texts that are already their stored triples' own text; else None.
+
+    Plain means: every row one valid triple (as `parse_rows` checks it), no
+    escape, language tag or blank node in it, and every XSD-typed literal an
+    integer, decimal, double or boolean in its canonical form. Such texts are
+    what the store holds, publishes and answers, term for term, so a changeset
+    of them is decided and committed as text (`render.py`), no term of it
+    becoming a Python object. None: the caller parses the rows term by term
+    (`triples`), which says what is wrong.
+    """
+    try:
+        document = "".join([f"{s} {p} {o} .\n" for s, p, o in rows])
+    except (TypeError, ValueError):  # a row that is not three items
+        return None
+    if (
+        "\\" in document
+        or '"@' in document
+        or "_:" in document
+        or document.count(_XSD_TYPED) != len(_CANONICAL_VALUES.findall(document))
+        or document.count("\n") != len(rows)
+        or _DOCUMENT_RE.fullmatch(document) is None
+        or max(map(len, chain.from_iterable(rows)), default=0) > MAX_TERM
+    ):
+        return None
+    try:
+        count = sum(1 for _ in ox.parse(document, format=ox.RdfFormat.N_TRIPLES))
+    except (SyntaxError, ValueError):
+        return None
+    return rows if count == len(rows) else None
+
+
+_IRI = r'<[^<>"{}|^`\\\x00-\x20]*>'
+_BLANK = r"_:[A-Za-z0-9_](?:[A-Za-z0-9_.\-]*[A-Za-z0-9_\-])?"
+_LITERAL = r'"[^"\\\n\r]*(?:\\.[^"\\\n\r]*)*"(?:\^\^' + _IRI + r"|@[A-Za-z]+(?:-[A-Za-z0-9]+)*)?"
+_XSD_TYPED = '"^^<http://www.w3.org/2001/XMLSchema#'
+_CANONICAL_VALUES = re.compile(  # XSD literals Oxigraph holds in the very same form
+    r'"(?:0|-?[1-9][0-9]{0,17})"\^\^<http://www\.w3\.org/2001/XMLSchema#integer> \.\n'
+    r'|"(?:0|-?[1-9][0-9]{0,14}|-?(?:0|[1-9][0-9]{0,14})\.[0-9]{0,14}[1-9])"'
+    r"\^\^<http://www\.w3\.org/2001/XMLSchema#decimal> \.\n"
+    r'|"(?:0|-?[1-9][0-9]{0,14}|-?(?:0|[1-9][0-9]{0,6})\.[0-9]{0,6}[1-9])"'
+    r"\^\^<http://www\.w3\.org/2001/XMLSchema#double> \.\n"
+    r'|"(?:true|false)"\^\^<http://www\.w3\.org/2001/XMLSchema#boolean> \.\n'
+)
+_DOCUMENT_RE = re.compile(
+    rf"(?:(?:{_IRI}|{_BLANK}) (?!<{SKOLEM}){_IRI} (?:{_IRI}|{_BLANK}|{_LITERAL}) \.\n)*"
+)
 
 
 def canonical(node: OxTerm) -> OxTerm:
@@ -175,7 +229,7 @@ def canonical_all(nodes: list[OxTerm]) -> list[OxTerm]:
     is cleared and reused keeps the old versions, and its `clear` slows down
     with every use (20,000 literals one by one took 15 s instead of 0.3).
     """
-    known = {n: _CANONICAL.get(n) for n in nodes if _xsd(n)}  # a local view: threads share it
+    known = {n: _CANONICAL.get(n) for n in nodes if _may_change(n)}  # threads share _CANONICAL
     todo = [n for n, held in known.items() if held is None]
     if todo:
         scratch = ox.Store()  # in memory
@@ -187,14 +241,26 @@ def canonical_all(nodes: list[OxTerm]) -> list[OxTerm]:
         for q in scratch:
             n = todo[int(q.subject.value[len(_SCRATCH) :])]
             known[n] = _CANONICAL[n] = q.object
+    if not known:
+        return nodes
     return [n if (held := known.get(n)) is None else held for n in nodes]
 
 
-def _xsd(node: OxTerm) -> bool:
-    return isinstance(node, ox.Literal) and node.datatype.value.startswith(_XSD)
+def _may_change(node: OxTerm) -> bool:
+    """Return whether a literal may have another canonical form (strings and integers in
+    theirs, the bulk of what robots write, are known not to)."""
+    if not isinstance(node, ox.Literal):
+        return False
+    datatype = node.datatype
+    if datatype == _INTEGER:
+        return _CANONICAL_INTEGER.fullmatch(node.value) is None
+    return datatype != _STRING and datatype.value.startswith(_XSD)
 
 
 _XSD = "http://www.w3.org/2001/XMLSchema#"
+_STRING = ox.NamedNode(XSD_STRING)
+_INTEGER = ox.NamedNode(_XSD + "integer")
+_CANONICAL_INTEGER = re.compile(r"0|-?[1-9][0-9]*")
 _SCRATCH = "urn:tspace:canonical:"
 _SCRATCH_NODE = ox.NamedNode("urn:tspace:canonical")
 _CANONICAL: dict[OxTerm, OxTerm] = {}  # literal as written -> as stored, the latest ones

@@ -112,7 +112,7 @@ def _one_query(
             deadline.check()
         which = row["g"]
         if which is None:
-            seq = int(row["seq"].value)
+            seq = max(seq, int(row["seq"].value))  # older seqs wait for compaction
             continue
         found[which.value].append(
             [oxterms.text(row["s"]), oxterms.text(row["p"]), oxterms.text(row["o"])]
@@ -129,9 +129,9 @@ def _one_subject(triples: list[list[str]]) -> list[list[str]]:
 
 
 def _seq(db: StoreDB, space: str) -> int:
-    for q in db.store.quads_for_pattern(space_node(space), SEQ, None, META):
-        return int(q.object.value)
-    return 0
+    """Return a space's sequence number: the largest of its seq quads (see `render.py`)."""
+    found = db.store.quads_for_pattern(space_node(space), SEQ, None, META)
+    return max((int(q.object.value) for q in found), default=0)
 
 
 def sparql(db: StoreDB, space: str, text: str, deadline: Deadline) -> bytes:

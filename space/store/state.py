@@ -23,6 +23,8 @@ from space.store.lifespans import Leases
 from space.store.oxterms import OxTerm, OxTriple
 
 _TYPE, _FUNCTIONAL_CLASS = (ox.NamedNode(x) for x in FUNCTIONAL)
+_TYPE_TEXT, _FUNCTIONAL_TEXT = (f"<{x}>" for x in FUNCTIONAL)
+Row = tuple[str, str, str]
 
 
 @dataclass
@@ -51,22 +53,56 @@ class SpaceState:
         self._overlay: dict[tuple[str, OxTriple], bool] = {}
         self._pending_objects: dict[tuple[OxTerm, OxTerm], set[OxTerm]] = {}
         self._refresh_functional = False
+        self._plain_rows: set[Row] = set()  # the batch's plain additions (see `decide`)
+        self._plain_subjects: set[str] = set()
         self.leases: Leases | None = None  # the store's, once it serves this space
 
     def settle(self) -> None:
         """Forget the overlay once its batch is committed."""
         self._overlay.clear()
         self._pending_objects.clear()
+        self._plain_rows.clear()
+        self._plain_subjects.clear()
         if self._refresh_functional:
             self._functional = self.db.functional(self.name)
             self._refresh_functional = False
+
+    def takes_plain(self, req: WriteRequest) -> bool:
+        """Return whether a write can be decided on its texts alone (`req.plain`).
+
+        It can when no functional property is in it (no timestamp to weigh, no
+        old value to replace), no lease is in play (it has no lifespan, and no
+        triple of this space is leased), and no changeset of the batch was
+        decided term by term in this space before it (its overlay is in terms).
+        """
+        if req.plain is None or self._overlay or req.lifespan:
+            return False
+        if self.leases is not None and (
+            self.leases.holds(self.name) or self.leases.has_garbage(self.name)
+        ):
+            return False
+        predicates = {row[1] for row in req.plain}
+        if _TYPE_TEXT in predicates and any(
+            row[1] == _TYPE_TEXT and row[2] == _FUNCTIONAL_TEXT for row in req.plain
+        ):
+            return False
+        return not predicates & {oxterms.text(p) for p in self._functional}
+
+    @property
+    def pending_plain(self) -> bool:
+        """Return whether the batch holds plain changesets of this space (see `takes_plain`)."""
+        return bool(self._plain_rows)
 
     def decide(self, req: WriteRequest, stamp: str) -> tuple[Net | None, list[dict]]:
         """Return the net changeset of a write with the next seq (None if nothing changes).
 
         Also returns the additions not applied and why (`{"triple", "reason"}`),
-        for the writer's acknowledgement.
+        for the writer's acknowledgement. A plain write (`req.plain`) must be one
+        this state `takes_plain`; any other must come after its batch's plain ones
+        are committed (`pending_plain`).
         """
+        if req.plain is not None:
+            return self._decide_plain(req, req.plain, stamp), []
         kept, replaced, dropped = self._functional_additions(req.added, stamp)
         removed, added = self._net("t", req.removed + replaced, kept)
         i_removed, i_added = self._net("i", req.inferred_removed, req.inferred_added)
@@ -90,20 +126,60 @@ class SpaceState:
         texts = [
             [oxterms.triple_text(t) for t in ts] for ts in (added, removed, i_added, i_removed)
         ]
+        return self._ordered(req, entry, texts, stamp), dropped
+
+    def _ordered(self, req: WriteRequest, entry: Entry, texts: list, stamp: str) -> Net:
+        """Give a decided entry its payload (what is logged and published); count its seq."""
         wire: dict = {"v": WIRE_VERSION, "id": req.id, "agent": req.agent, "ts": stamp}
         if req.cause:
             wire["cause"] = req.cause
         wire["seq"] = entry.seq
         if req.lifespan:
             wire["lifespan"] = req.lifespan
-        if new_prefixes:
-            wire["prefixes"] = new_prefixes
+        if entry.prefixes:
+            wire["prefixes"] = entry.prefixes
         for name, listed in zip(LISTS, texts, strict=True):
             if listed:
                 wire[name] = listed
         entry.payload = pack(wire)
         self.seq = entry.seq
-        return Net(entry, texts), dropped
+        return Net(entry, texts)
+
+    def _decide_plain(self, req: WriteRequest, rows: list, stamp: str) -> Net | None:
+        """Decide a write of plain additions on their texts (`oxterms.plain_rows`).
+
+        A text is its triple here, so duplicates are found by text, and a triple
+        is looked up in the database only when its subject is there already.
+        """
+        new = self._new_rows(list(dict.fromkeys(map(tuple, rows))))
+        prefixes = self.prefixes.update(req.prefixes)
+        if not (new or prefixes):
+            return None
+        entry = Entry(
+            space=self.name,
+            seq=self.seq + 1,
+            request=req.id,
+            payload=b"",
+            plain=new,  # type: ignore[arg-type]
+            prefixes=prefixes,
+        )
+        return self._ordered(req, entry, [new, [], [], []], stamp)
+
+    def _new_rows(self, rows: list[Row]) -> list[Row]:
+        """Return the rows neither in the database nor added earlier in the batch; note them."""
+        known = {
+            s: s in self._plain_subjects or self.db.has_subject(self.name, oxterms.term(s))
+            for s in {row[0] for row in rows}
+        }
+        new = [
+            row
+            for row in rows
+            if not known[row[0]]
+            or not (row in self._plain_rows or self.db.has(self.name, "t", oxterms.triple(row)))
+        ]
+        self._plain_rows.update(new)
+        self._plain_subjects.update(row[0] for row in new)
+        return new
 
     def install(self, payload: bytes) -> Net:
         """Take a leader's published net changeset exactly as given (a follower store).

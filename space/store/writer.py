@@ -108,6 +108,12 @@ class Writer:
     def write(self, req: Request, pending: list[Pending]) -> None:
         write = intake.write_request(req.payload or b"")
         state = self._writable(req.space)
+        if self.guard is not None or not state.takes_plain(write):
+            write.parse_plain()
+            if state.pending_plain:  # decided on texts: commit them before deciding in terms
+                self.commit(pending)
+                pending.clear()
+                state = self._writable(req.space)
         if any(p.state is state and p.net and p.net.entry.request == write.id for p in pending):
             self._reply_later(req, state, pending, write.id)
             return
@@ -202,12 +208,13 @@ class Writer:
             return
         for p in pending:
             p.state.settle()
+        # Published before answered: watchers hear of a change as soon as it is durable.
+        self._publisher.publish([(p.state, p.net) for p in decided])  # type: ignore[misc]
         for p in pending:
             if p.req.query is None:
                 continue
             p.req.query.reply(p.req.key, pack(p.reply(p.net)))
             p.req.query.drop()
-        self._publisher.publish([(p.state, p.net) for p in decided])  # type: ignore[misc]
 
     def _fail(self, exc: CommitFailed, pending: list[Pending]) -> None:
         """Refuse writes from now on; forget what the batch decided; tell every writer."""
