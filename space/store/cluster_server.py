@@ -22,7 +22,7 @@ import queue
 import socket
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 import zenoh
@@ -30,16 +30,14 @@ import zenoh
 from space import keys
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload, QueryError, SpaceError
-from space.store import intake, queries
 from space.store.cluster_db import applied_revision, space_seqs
 from space.store.cluster_keys import ROOT as ETCD_ROOT
 from space.store.cluster_node import ClusterNode
 from space.store.cluster_state import ClusterSpace
 from space.store.cluster_writer import ClusterWriter
 from space.store.db import StoreDB
-from space.store.guard import WriteGuard, writer_of
-from space.store.publish import Publisher
-from space.store.readers import Readers
+from space.store.guard import WriteGuard
+from space.store.serving import Serving, request_op
 from space.store.writer import Request, answer, reject
 
 log = logging.getLogger("tspace.store")
@@ -59,7 +57,7 @@ def cluster_key(root: str, node: str = "*") -> str:
     return f"{root}/@cluster/{node}"
 
 
-class ClusterStoreServer:
+class ClusterStoreServer(Serving):
     """Serve every space as one replica of an etcd cluster.
 
     Construct, `start()`, `close()`; the Zenoh session belongs to the caller.
@@ -90,15 +88,10 @@ class ClusterStoreServer:
         self.durable, self.log_keep, self.max_spaces = durable, log_keep, max_spaces
         self.etcd_root, self.guard = etcd_root, guard
         self.quorum = (0, len(self.endpoints))  # (members reachable, members), last probe
-        self._queue: queue.SimpleQueue = queue.SimpleQueue()
         self._spaces: dict[str, ClusterSpace] = {}
-        self._readers = Readers(limit=query_timeout, slots=query_slots)
-        self._publisher = Publisher(session, root)
-        self._db: StoreDB | None = None
+        super().__init__(query_timeout, query_slots)
         self._node: ClusterNode | None = None
         self._writer: ClusterWriter | None = None
-        self._worker: threading.Thread | None = None
-        self._declared: list = []
         self._probing = False
 
     def start(self) -> None:
@@ -133,7 +126,8 @@ class ClusterStoreServer:
         self._node.start()
         self._worker = threading.Thread(target=self._run, name="tspace-replica", daemon=True)
         self._worker.start()
-        self._declared = self._declare()
+        # complete=True: a client's request goes to one replica (the nearest), not to all.
+        self._declared = self._declare_services(complete=True)
         log.info(
             "replica %s of etcd %s: %d space(s) from %s, at revision %d",
             self.name,
@@ -143,63 +137,10 @@ class ClusterStoreServer:
             revision,
         )
 
-    def close(self) -> None:
-        """Stop serving and applying, finish queued work, close etcd and the database."""
-        for d in self._declared:
-            d.undeclare()
-        self._declared = []
-        if self._worker is not None:
-            self._queue.put(None)
-            self._worker.join()
-            self._worker = None
+    def _stop(self) -> None:
         if self._node is not None:
             self._node.close()
             self._node = None
-        self._readers.close()
-        self._publisher.close()
-        if self._db is not None:
-            self._db.close()
-            self._db = None
-
-    def _declare(self) -> list:
-        # complete=True: a client's request goes to one replica (the nearest), not to all.
-        root, s = self.root, self.session
-
-        def q(key: str, kind: str) -> zenoh.Queryable:
-            return s.declare_queryable(key, self._on_query(kind), complete=True)
-
-        return [
-            q(f"{root}/*/@/write", "write"),
-            q(f"{root}/*/@/write/*", "write"),
-            s.declare_subscriber(f"{root}/*/@/write", self._on_sample("write")),
-            s.declare_subscriber(f"{root}/*/@/write/*", self._on_sample("write")),
-            q(f"{root}/*/@/query", "query"),
-            q(f"{root}/*/@/query/*", "query"),
-            q(f"{root}/*/@/log", "log"),
-            q(f"{root}/*/{keys.ASSERTED}/**", "keys"),
-            q(f"{root}/*/{keys.INFERRED}/**", "keys"),
-            q(f"{root}/@repl/spaces", "spaces"),
-            # As the embedded store's: subscribers catch up from the log when it comes back.
-            s.liveliness().declare_token(f"{root}/@leader/{s.zid()}"),
-        ]
-
-    def _on_query(self, kind: str) -> Callable[[zenoh.Query], None]:
-        def callback(query: zenoh.Query) -> None:
-            key = str(query.key_expr)
-            payload = query.payload.to_bytes() if query.payload is not None else None
-            self._queue.put(Request(kind, key.split("/")[1], payload, query, key, writer_of(key)))
-
-        return callback
-
-    def _on_sample(self, kind: str) -> Callable[[zenoh.Sample], None]:
-        def callback(sample: zenoh.Sample) -> None:
-            key = str(sample.key_expr)
-            payload = sample.payload.to_bytes()
-            self._queue.put(
-                Request(kind, key.split("/")[1], payload, key=key, writer=writer_of(key))
-            )
-
-        return callback
 
     # The worker.
 
@@ -233,7 +174,9 @@ class ClusterStoreServer:
                 going = False
             elif isinstance(item, tuple):
                 self._event(item)
-            elif item.kind == "write" or (item.kind == "query" and _op(item.payload) == "take"):
+            elif item.kind == "write" or (
+                item.kind == "query" and request_op(item.payload) == "take"
+            ):
                 self._decide(item, 1)
             elif item.kind == "spaces":
                 answer(item, {n: s.seq for n, s in self._spaces.items() if s.seq})
@@ -287,41 +230,9 @@ class ClusterStoreServer:
     def _read(self, req: Request) -> None:
         """Hand a read to a reader thread (the replica applied what etcd had committed)."""
         try:
-            self._submit(req)
+            self._submit_read(req)
         except (SpaceError, ValueError) as exc:
             reject(req, exc)
-
-    def _submit(self, req: Request) -> None:
-        assert req.query is not None and self._db is not None
-        db, root, query = self._db, self.root, req.query
-        if req.kind == "keys":
-            spaces = self._key_spaces(req.key)
-            self._readers.submit(
-                query, req.key, lambda _d: queries.key_get(db, spaces, query, root)
-            )
-            return
-        space = keys.check_space(req.space)
-        if req.kind == "log":
-            first, last = intake.log_request(req.payload or b"", 2**62)
-            self._readers.submit(
-                query, req.key, lambda _d: queries.log_entries(db, space, first, last)
-            )
-            return
-        read = intake.query_request(req.payload or b"")
-        if read.op == "sparql":
-            job = lambda d: queries.sparql(db, space, read.text, d)  # noqa: E731
-        else:
-            job = lambda d: queries.read(db, space, read, d)  # noqa: E731
-        self._readers.submit(query, req.key, job, read.limit)
-
-    def _key_spaces(self, key: str) -> list[str]:
-        chunk = key.split("/")[1]
-        if "*" not in chunk and "$" not in chunk:
-            return [keys.check_space(chunk)]
-        selector = zenoh.KeyExpr(key)
-        return [
-            n for n in self._spaces if selector.intersects(zenoh.KeyExpr(f"{self.root}/{n}/**"))
-        ]
 
     def _space(self, name: str) -> ClusterSpace:
         state = self._spaces.get(name)
@@ -332,9 +243,7 @@ class ClusterStoreServer:
 
     def _heartbeat(self) -> None:
         """Publish each space's seq and this replica's view of the cluster; probe the members."""
-        for name, state in self._spaces.items():
-            if state.seq:
-                self.session.put(keys.service_key(name, "seq", self.root), pack({"seq": state.seq}))
+        self._publish_seqs()
         reachable, members = self.quorum
         writer = self._writer
         status = {
@@ -364,14 +273,6 @@ class ClusterStoreServer:
                 "back in" if has else "no",
                 *self.quorum,
             )
-
-
-def _op(payload: bytes | None) -> object:
-    try:
-        wire = unpack(payload or b"")
-    except MalformedPayload:
-        return None
-    return wire.get("op") if isinstance(wire, dict) else None
 
 
 def _stale(req: Request) -> bool:

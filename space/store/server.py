@@ -17,20 +17,17 @@ import logging
 import queue
 import threading
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import zenoh
 
 from space import keys
-from space.changeset import pack, unpack
-from space.errors import MalformedPayload, QueryError, SpaceError
-from space.store import intake, lifespans, queries
+from space.errors import QueryError, SpaceError
+from space.store import lifespans
 from space.store.db import StoreDB
-from space.store.guard import WriteGuard, writer_of
+from space.store.guard import WriteGuard
 from space.store.lifespans import Leases
-from space.store.publish import Publisher
-from space.store.readers import Readers
+from space.store.serving import Serving, request_op
 from space.store.state import SpaceState
 from space.store.writer import Pending, Request, Writer, answer, reject
 
@@ -43,7 +40,7 @@ BUSY = 0.05  # seconds after a request during which expiry turns are one write e
 _READS = ("query", "log", "keys")
 
 
-class StoreServer:
+class StoreServer(Serving):
     """Serve every space of a database on a Zenoh session.
 
     Construct, then `start()`; `close()` undeclares everything and closes the
@@ -70,13 +67,8 @@ class StoreServer:
         self.durable = durable
         self.root = root
         self.max_spaces = max_spaces
-        self._queue: queue.SimpleQueue[Request | None] = queue.SimpleQueue()
         self._spaces: dict[str, SpaceState] = {}
-        self._declared: list = []
-        self._readers = Readers(limit=query_timeout, slots=query_slots)
-        self._publisher = Publisher(session, root)
-        self._db: StoreDB | None = None
-        self._worker: threading.Thread | None = None
+        super().__init__(query_timeout, query_slots)
         self._writer: Writer | None = None
         self._leases = Leases()
         self._busy_until = 0.0  # monotonic time until which requests are coming in
@@ -106,43 +98,8 @@ class StoreServer:
             self._space(name)
         self._worker = threading.Thread(target=self._run, name="tspace-store", daemon=True)
         self._worker.start()
-        self._declared = self._serve()
+        self._declared = self._declare_services(complete=False)
         log.info("store: %d space(s) from %s", len(self._spaces), self._db.path)
-
-    def close(self) -> None:
-        """Stop serving, finish queued work and close the database (no-op if not started)."""
-        for declared in self._declared:
-            declared.undeclare()
-        self._declared = []
-        if self._worker is not None:
-            self._queue.put(None)
-            self._worker.join()
-            self._worker = None
-        self._readers.close()
-        self._publisher.close()
-        if self._db is not None:
-            self._db.close()
-            self._db = None
-
-    # Zenoh callbacks: parse the key, enqueue, return.
-
-    def _on_query(self, kind: str) -> Callable[[zenoh.Query], None]:
-        def callback(query: zenoh.Query) -> None:
-            key = str(query.key_expr)
-            space = key.split("/")[1]
-            payload = query.payload.to_bytes() if query.payload is not None else None
-            self._queue.put(Request(kind, space, payload, query, key, writer_of(key)))
-
-        return callback
-
-    def _on_sample(self, kind: str) -> Callable[[zenoh.Sample], None]:
-        def callback(sample: zenoh.Sample) -> None:
-            key = str(sample.key_expr)
-            space = key.split("/")[1]
-            payload = sample.payload.to_bytes()
-            self._queue.put(Request(kind, space, payload, key=key, writer=writer_of(key)))
-
-        return callback
 
     # The writer: the only thread that decides and commits.
 
@@ -150,7 +107,7 @@ class StoreServer:
         next_beat = time.monotonic()
         while True:
             if time.monotonic() >= next_beat:
-                self._heartbeat()
+                self._publish_seqs()
                 self._writer.probe(self._readers.running)
                 next_beat = time.monotonic() + HEARTBEAT
             batch: list[Request] = []
@@ -184,7 +141,7 @@ class StoreServer:
                     continue
                 self._writer.commit(pending)
                 pending = []
-                if req.kind == "query" and _op(req.payload) == "take":
+                if req.kind == "query" and request_op(req.payload) == "take":
                     self._writer.take(req, pending)
                     self._writer.commit(pending)
                     pending = []
@@ -197,51 +154,11 @@ class StoreServer:
                 reject(req, QueryError(f"internal error: {type(exc).__name__}: {exc}"))
         self._writer.commit(pending)
 
-    def _heartbeat(self) -> None:
-        """Publish each space's sequence number, so subscribers learn of changes they missed."""
-        for name, state in self._spaces.items():
-            if state.seq:
-                self.session.put(keys.service_key(name, "seq", self.root), pack({"seq": state.seq}))
-
     def _other(self, req: Request) -> None:
         if req.kind == "spaces":
             answer(req, self._seqs())
         elif req.kind in _READS:
-            self._read(req)
-
-    def _read(self, req: Request) -> None:
-        """Hand a read to a reader thread: it starts after every write queued before it."""
-        assert req.query is not None
-        db, root = self._db_(), self.root
-        if req.kind == "keys":
-            spaces = self._key_spaces(req.key)
-            self._readers.submit(
-                req.query, req.key, lambda _d: queries.key_get(db, spaces, req.query, root)
-            )
-            return
-        space = keys.check_space(req.space)
-        if req.kind == "log":
-            first, last = intake.log_request(req.payload or b"", 2**62)
-            self._readers.submit(
-                req.query, req.key, lambda _d: queries.log_entries(db, space, first, last)
-            )
-            return
-        read = intake.query_request(req.payload or b"")
-        if read.op == "sparql":
-            job = lambda d: queries.sparql(db, space, read.text, d)  # noqa: E731
-        else:
-            job = lambda d: queries.read(db, space, read, d)  # noqa: E731
-        self._readers.submit(req.query, req.key, job, read.limit)
-
-    def _key_spaces(self, key: str) -> list[str]:
-        """Return the known spaces a GET on triple keys may name (none is created)."""
-        chunk = key.split("/")[1]
-        if "*" not in chunk and "$" not in chunk:
-            return [keys.check_space(chunk)]  # read from the database as it is: nothing created
-        selector = zenoh.KeyExpr(key)
-        return [
-            n for n in self._spaces if selector.intersects(zenoh.KeyExpr(f"{self.root}/{n}/**"))
-        ]
+            self._submit_read(req)
 
     def _db_(self) -> StoreDB:
         assert self._db is not None
@@ -289,34 +206,5 @@ class StoreServer:
             return HEARTBEAT
         return max(0.0, due - time.time())
 
-    def _serve(self) -> list:
-        root, s = self.root, self.session
-        on_query = self._on_query
-        return [
-            s.declare_queryable(f"{root}/*/@/write", on_query("write")),
-            s.declare_subscriber(f"{root}/*/@/write", self._on_sample("write")),
-            s.declare_queryable(f"{root}/*/@/query", on_query("query")),
-            # The same services, under the name of the writer (see space.store.guard).
-            s.declare_queryable(f"{root}/*/@/write/*", on_query("write")),
-            s.declare_subscriber(f"{root}/*/@/write/*", self._on_sample("write")),
-            s.declare_queryable(f"{root}/*/@/query/*", on_query("query")),
-            s.declare_queryable(f"{root}/*/@/log", on_query("log")),
-            s.declare_queryable(f"{root}/*/{keys.ASSERTED}/**", on_query("keys")),
-            s.declare_queryable(f"{root}/*/{keys.INFERRED}/**", on_query("keys")),
-            s.declare_queryable(f"{root}/@repl/spaces", on_query("spaces")),
-            # A subscriber that sees this token come back (a cut between us healed)
-            # fetches what it missed from the log (space.client, `_watch_store`).
-            s.liveliness().declare_token(f"{root}/@leader/{s.zid()}"),
-        ]
-
     def _seqs(self) -> dict[str, int]:
         return {name: state.seq for name, state in self._spaces.items()}
-
-
-def _op(payload: bytes | None) -> object:
-    """Return a query request's op without checking the rest (takes go to the writer)."""
-    try:
-        wire = unpack(payload or b"")
-    except MalformedPayload:
-        return None
-    return wire.get("op") if isinstance(wire, dict) else None
