@@ -40,7 +40,7 @@ from space.store.etcd_applier import Batch
 from space.store.guard import Refused, WriteGuard
 from space.store.publish import Publisher
 from space.store.state import Net
-from space.store.writer import Request, SpaceLimit, answer, reject
+from space.store.writer import Request, SpaceLimit, answer, decide, reject
 
 log = logging.getLogger("tspace.store")
 
@@ -102,17 +102,7 @@ class ClusterWriter:
             return
         self._check(req, write, state)
         stamp = write.ts or str(self.session.new_timestamp())
-        net, dropped = state.decide(write, stamp)
-        if dropped:
-            log.info(
-                "%s on %s: %d triple(s) not applied: %s",
-                write.id,
-                state.name,
-                len(dropped),
-                dropped,
-            )
-            if net is not None:
-                net.entry.dropped = pack(dropped)
+        net, dropped = decide(state, write, stamp)
 
         def reply(n: Net | None) -> dict:
             ack: dict = {"id": write.id, "seq": n.entry.seq if n else state.seq}

@@ -125,17 +125,7 @@ class Writer:
             answer(req, again)
             return
         self._check(req, write)
-        net, dropped = state.decide(write, write.ts or str(self.session.new_timestamp()))
-        if dropped:
-            log.info(
-                "%s on %s: %d triple(s) not applied: %s",
-                write.id,
-                state.name,
-                len(dropped),
-                dropped,
-            )
-            if net is not None:
-                net.entry.dropped = pack(dropped)  # a retry is told the same
+        net, dropped = decide(state, write, write.ts or str(self.session.new_timestamp()))
 
         def reply(net: Net | None) -> dict:
             ack: dict = {"id": write.id, "seq": net.entry.seq if net else state.seq}
@@ -265,6 +255,21 @@ class Writer:
             return
         log.warning("the database commits again: writes are accepted again")
         self.failed = ""
+
+
+def decide(state: SpaceState, write: intake.WriteRequest, stamp: str) -> tuple[Net | None, list]:
+    """Decide a write on a space's state; note what it does not apply, in the log and its entry.
+
+    The entry keeps the dropped triples so that a retry is told the same.
+    """
+    net, dropped = state.decide(write, stamp)
+    if dropped:
+        log.info(
+            "%s on %s: %d triple(s) not applied: %s", write.id, state.name, len(dropped), dropped
+        )
+        if net is not None:
+            net.entry.dropped = pack(dropped)
+    return net, dropped
 
 
 def _no_reply(_net: Net | None) -> dict:
