@@ -289,6 +289,10 @@ class Deployment:
 
     def _tick_scenario(self, ts: TripleSpace, run: ScenarioRun) -> int | None:
         """Advance the scenario; return an exit code when a `--once` run is over."""
+        if run.finishing:
+            # Show the state the last step happened on before the finishing action
+            # (the robot told to idle) changes it: the view's story ends with that step.
+            self._show()
         try:
             run.tick(ts, self.mirror)
         except SpaceError as exc:

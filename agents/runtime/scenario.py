@@ -185,6 +185,12 @@ class ScenarioRun:
             return self._index == len(self.scenario.steps)
 
     @property
+    def finishing(self) -> bool:
+        """Return whether every step has happened and the finishing action has not run yet."""
+        with self._lock:
+            return self._index == len(self.scenario.steps) and not self._finished
+
+    @property
     def progress(self) -> str:
         """Return "step i/n: name" of the step awaited, for the live view."""
         with self._lock:
