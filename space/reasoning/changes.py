@@ -44,6 +44,10 @@ class ChangeLog:
         if t not in before:
             before[t] = _STATES[t in self._triples][t in self._asserted]
 
+    def touched(self, triples: list[T]) -> None:
+        """Note triples, none of them present before, as touched (a fresh engine's load)."""
+        self._before = dict.fromkeys(triples, (False, False))
+
     @property
     def before(self) -> dict[T, tuple[bool, bool]]:
         """Return, for each triple this update touched, (was present, was asserted); read only."""

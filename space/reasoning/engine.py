@@ -17,6 +17,7 @@ from rdflib import OWL, BNode, Graph, URIRef
 from rdflib.term import Node
 
 from space.errors import InputError
+from space.reasoning import seminaive
 from space.reasoning.agenda import Agenda
 from space.reasoning.builtins import Context, Registry, default_registry
 from space.reasoning.changes import ChangeLog
@@ -124,7 +125,11 @@ class RuleEngine(EngineReads):
         """
         if self._loaded:
             raise RuleError("load() starts a new engine; this one is loaded, use apply()")
-        return self.apply(added=triples)
+        if not seminaive.eligible(self):
+            return self.apply(added=triples)
+        delta = seminaive.materialise(self, self._ontology + [self._encode(t) for t in triples])
+        self._loaded = True
+        return delta
 
     def apply(self, added: Iterable[Triple] = (), removed: Iterable[Triple] = ()) -> Delta:
         """Retract `removed`, assert `added`, run the rules; return the net change.

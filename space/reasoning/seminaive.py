@@ -1,0 +1,137 @@
+"""Materialise a fresh engine set-at-a-time: semi-naive rounds instead of one triple at a time.
+
+`RuleEngine.load` of monotonic rules (OWL RL and rules without
+drop/remove/noValue) comes here. Each round joins only the triples new in the
+round before (the delta) against the whole state, through the engine's own
+compiled joins, and the next round's delta is what those joins derived that
+was not there. A derivation is found in the round its last premise arrives,
+so every match of every body over the closure is found, as the incremental
+path finds them one triple at a time; the engine ends in the state that path
+reaches (the same triples, asserted set and derivations), so later updates
+are exact (DRed) as after any load.
+
+What makes it faster than the incremental path: no per-triple journal, undo
+log or agenda; derivations recorded into `defaultdict`s (C-level inserts);
+the index inserts inlined; and the cyclic garbage collector paused, since
+the load allocates millions of tuples, none of them garbage, that each
+collection would walk again (40% of a load's time with it running).
+"""
+
+from __future__ import annotations
+
+import gc
+from collections import defaultdict
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import TYPE_CHECKING
+
+from space.reasoning.delta import Delta
+from space.reasoning.joins import Match
+from space.reasoning.triples import T, _put
+
+if TYPE_CHECKING:
+    from space.reasoning.engine import RuleEngine
+
+
+def eligible(engine: RuleEngine) -> bool:
+    """Tell whether a load can go set-at-a-time: no rule fires one match at a time.
+
+    Production rules fire in agenda order and builtin actions act in match
+    order; both are orders the incremental path defines, so they keep it.
+    """
+    return engine._withdrawals is None and not any(
+        c.production or c.actions for c in engine._compiled
+    )
+
+
+def materialise(engine: RuleEngine, plus: list[T]) -> Delta:
+    """Assert `plus` (the ontology and the data, encoded) in a fresh engine and close it.
+
+    Returns the load's `Delta`, as `ChangeLog.delta` gives it: every triple added.
+    """
+    with _collector_paused():
+        order = _close(engine, plus)
+        engine._log.begin(plus, [])
+        engine._log.touched(order)
+        return engine._log.delta(())
+
+
+def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
+    """Run the rounds; fill the store, the asserted set and the derivations.
+
+    Returns every triple of the state in the order it arrived: the asserted
+    ones in their order, then each round's derivations.
+    """
+    store, asserted = engine._store, engine._asserted
+    triples, spo, pos, osp = store.triples, store.spo, store.pos, store.osp
+    derivations: defaultdict[T, set] = defaultdict(set)
+    dependents: defaultdict[T, set[T]] = defaultdict(set)
+    starts = engine._index.starts
+    delta = list(dict.fromkeys(plus))
+    asserted.update(delta)
+    order: list[T] = []
+    out: list[Match] = []
+    fresh: dict[T, None] = {}
+    for compiled in engine._compiled:  # bodies without triples (axioms): once, first
+        if compiled.start is not None:
+            compiled.start(0, 0, 0, out)
+            _record(out, compiled.order, compiled.heads, derivations, dependents, triples, fresh)
+            out.clear()
+    delta.extend(t for t in fresh if t not in asserted)
+    fresh.clear()
+    while delta:
+        # The round's delta joins the state that includes it, so a derivation
+        # whose premises all arrived in this round is found (once per premise).
+        triples.update(delta)
+        order.extend(delta)
+        for s, p, o in delta:
+            _put(spo, s, p, o)
+            _put(pos, p, o, s)
+            _put(osp, o, s, p)
+        for s, p, o in delta:
+            for compiled, trigger in starts(p, o):
+                trigger(s, p, o, out)
+                if out:
+                    _record(
+                        out, compiled.order, compiled.heads, derivations, dependents, triples, fresh
+                    )
+                    out.clear()
+        delta = list(fresh)
+        fresh.clear()
+    derivations.default_factory = None  # from here on a plain mapping, as Support keeps it
+    dependents.default_factory = None
+    engine._support.derivations = derivations  # type: ignore[assignment]
+    engine._support.dependents = dependents  # type: ignore[assignment]
+    return order
+
+
+def _record(
+    out: list[Match],
+    rule: int,
+    heads: object,
+    derivations: defaultdict[T, set],
+    dependents: defaultdict[T, set[T]],
+    triples: set[T],
+    fresh: dict[T, None],
+) -> None:
+    """Record the derivations of a batch of matches; note the heads not yet in the state."""
+    for premises, bindings in out:
+        derivation = (rule, premises)
+        for head in heads(bindings):  # type: ignore[operator]
+            derivations[head].add(derivation)
+            for premise in premises:
+                dependents[premise].add(head)
+            if head not in triples:
+                fresh[head] = None
+
+
+@contextmanager
+def _collector_paused() -> Iterator[None]:
+    """Pause the cyclic garbage collector (if it runs) for a bulk build."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
