@@ -20,6 +20,7 @@ from space.errors import InputError
 from space.reasoning import seminaive
 from space.reasoning.agenda import Agenda
 from space.reasoning.builtins import Context, Registry, default_registry
+from space.reasoning.bulk import read_ids
 from space.reasoning.changes import ChangeLog
 from space.reasoning.checks import check_rule, mark_shared_names
 from space.reasoning.compile import CompiledRule, RuleIndex
@@ -123,11 +124,24 @@ class RuleEngine(EngineReads):
             RuleLoopError: production rules did not settle; the state is loaded without
                 their firings (see `apply`).
         """
+        return self._load_ids([self._encode(t) for t in triples])
+
+    def load_files(self, paths: Iterable[str | Path]) -> Delta:
+        """`load` RDF files (format from the suffix), read by Oxigraph straight into ids.
+
+        Raises:
+            InputError: a file is missing or malformed.
+            RuleError, RuleLoopError: as `load`.
+        """
+        return self._load_ids(read_ids(paths, self.terms))
+
+    def _load_ids(self, triples: list[T]) -> Delta:
+        """`load` encoded triples: set-at-a-time when no rule fires one match at a time."""
         if self._loaded:
             raise RuleError("load() starts a new engine; this one is loaded, use apply()")
         if not seminaive.eligible(self):
-            return self.apply(added=triples)
-        delta = seminaive.materialise(self, self._ontology + [self._encode(t) for t in triples])
+            return self._apply_ids(triples, [])
+        delta = seminaive.materialise(self, self._ontology + triples)
         self._loaded = True
         return delta
 

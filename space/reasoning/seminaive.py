@@ -21,12 +21,14 @@ from __future__ import annotations
 
 import gc
 from collections import defaultdict
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
+from space.reasoning.compile import _slots
 from space.reasoning.delta import Delta
 from space.reasoning.joins import Match
+from space.reasoning.rules import Functor, Pattern, Var
 from space.reasoning.triples import T, _put
 
 if TYPE_CHECKING:
@@ -67,15 +69,18 @@ def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
     derivations: defaultdict[T, set] = defaultdict(set)
     dependents: defaultdict[T, set[T]] = defaultdict(set)
     starts = engine._index.starts
+    # Each triple as the one object the store holds: derivations then share it,
+    # not a copy per premise a join built (a third of the load's memory).
+    canon: dict[T, T] = {}
+    record = _recorders(engine, derivations, dependents, canon, fresh := {})
     delta = list(dict.fromkeys(plus))
     asserted.update(delta)
     order: list[T] = []
     out: list[Match] = []
-    fresh: dict[T, None] = {}
     for compiled in engine._compiled:  # bodies without triples (axioms): once, first
         if compiled.start is not None:
             compiled.start(0, 0, 0, out)
-            _record(out, compiled.order, compiled.heads, derivations, dependents, triples, fresh)
+            record[compiled.order](out)
             out.clear()
     delta.extend(t for t in fresh if t not in asserted)
     fresh.clear()
@@ -83,6 +88,7 @@ def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
         # The round's delta joins the state that includes it, so a derivation
         # whose premises all arrived in this round is found (once per premise).
         triples.update(delta)
+        canon.update(zip(delta, delta, strict=True))
         order.extend(delta)
         for s, p, o in delta:
             _put(spo, s, p, o)
@@ -92,9 +98,7 @@ def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
             for compiled, trigger in starts(p, o):
                 trigger(s, p, o, out)
                 if out:
-                    _record(
-                        out, compiled.order, compiled.heads, derivations, dependents, triples, fresh
-                    )
+                    record[compiled.order](out)
                     out.clear()
         delta = list(fresh)
         fresh.clear()
@@ -105,33 +109,75 @@ def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
     return order
 
 
-def _record(
-    out: list[Match],
-    rule: int,
-    heads: object,
+def _recorders(
+    engine: RuleEngine,
     derivations: defaultdict[T, set],
     dependents: defaultdict[T, set[T]],
-    triples: set[T],
-    fresh: dict[T, None],
-) -> None:
-    """Record the derivations of a batch of matches; note the heads not yet in the state."""
-    for premises, bindings in out:
-        derivation = (rule, premises)
-        for head in heads(bindings):  # type: ignore[operator]
-            derivations[head].add(derivation)
-            for premise in premises:
-                dependents[premise].add(head)
-            if head not in triples:
-                fresh[head] = None
+    canon: dict[T, T],
+    fresh: dict[T, T],
+) -> dict[int, Callable[[list[Match]], None]]:
+    """Compile, per rule, what records a batch of its matches and notes the new heads.
+
+    Generated as source, as the joins are, with the heads built inline and the
+    premises unrolled: this loop runs once per derivation, the load's most.
+    """
+    namespace: dict[str, object] = {
+        "DER": derivations,
+        "DEP": dependents,
+        "CANON": canon,
+        "FRESH": fresh,
+    }
+    recorders = {}
+    for compiled in engine._compiled:
+        rule = compiled.rule
+        premises = sum(1 for item in rule.body if isinstance(item, Pattern))
+        heads = [item for item in rule.head if isinstance(item, Pattern)]
+        slots = _slots(rule)
+        lines = [
+            "def record(out):",
+            "    for prem, b in out:",
+            f"        prem = ({''.join(f'CANON[prem[{i}]], ' for i in range(premises))})",
+            f"        d = ({compiled.order}, prem)",
+        ]
+        inline = not any(isinstance(t, Functor) for h in heads for t in h.terms)
+        if inline:
+            made = [f"({', '.join(_term(t, slots, engine) for t in h.terms)})" for h in heads]
+        else:  # a functor in the head (a conflict): built by the engine's own head code
+            namespace[f"HEADS{compiled.order}"] = compiled.heads
+            lines.append(f"        hs = HEADS{compiled.order}(b)")
+            made = [f"hs[{i}]" for i in range(len(heads))]
+        for head in made:
+            lines.append(f"        h = {head}")
+            lines.append("        h = CANON.get(h) or FRESH.setdefault(h, h)")
+            lines.append("        DER[h].add(d)")
+            lines.extend(f"        DEP[prem[{i}]].add(h)" for i in range(premises))
+        scope: dict[str, object] = {}
+        source = "\n".join(lines)
+        exec(compile(source, f"<bulk record {compiled.label}>", "exec"), namespace, scope)
+        recorders[compiled.order] = scope["record"]
+    return recorders  # type: ignore[return-value]
+
+
+def _term(term: object, slots: dict[Var, int], engine: RuleEngine) -> str:
+    if isinstance(term, Var):
+        return f"b[{slots[term]}]"
+    return str(engine.terms.id(term))  # type: ignore[arg-type]
 
 
 @contextmanager
 def _collector_paused() -> Iterator[None]:
-    """Pause the cyclic garbage collector (if it runs) for a bulk build."""
+    """Pause the cyclic garbage collector (if it runs) for a bulk build, then freeze.
+
+    Freezing moves what the process holds (the new state above all) out of
+    the collector's generations: it is long-lived, and the first collection
+    after the load would otherwise walk all of it (13% of a load). Frozen
+    objects are still freed when their last reference goes.
+    """
     was = gc.isenabled()
     gc.disable()
     try:
         yield
     finally:
+        gc.freeze()
         if was:
             gc.enable()
