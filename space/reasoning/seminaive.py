@@ -52,10 +52,7 @@ def materialise(engine: RuleEngine, plus: list[T]) -> Delta:
     Returns the load's `Delta`, as `ChangeLog.delta` gives it: every triple added.
     """
     with _collector_paused():
-        order = _close(engine, plus)
-        engine._log.begin(plus, [])
-        engine._log.touched(order)
-        return engine._log.delta(())
+        return engine._log.fresh(_close(engine, plus))
 
 
 def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
