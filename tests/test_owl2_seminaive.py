@@ -56,7 +56,7 @@ def state(engine: RuleEngine) -> tuple:
         set(map(decode, engine._asserted)),
         derivations,
         dependents,
-        engine.conflicts(),
+        set(engine.conflicts()),  # sorted, but ties (two XMLLiterals) keep store order
     )
 
 

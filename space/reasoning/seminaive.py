@@ -25,10 +25,9 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
-from space.reasoning.compile import _slots
 from space.reasoning.delta import Delta
 from space.reasoning.joins import Match
-from space.reasoning.rules import Functor, Pattern, Var
+from space.reasoning.rules import Pattern
 from space.reasoning.triples import T, _put
 
 if TYPE_CHECKING:
@@ -116,8 +115,8 @@ def _recorders(
 ) -> dict[int, Callable[[list[Match]], None]]:
     """Compile, per rule, what records a batch of its matches and notes the new heads.
 
-    Generated as source, as the joins are, with the heads built inline and the
-    premises unrolled: this loop runs once per derivation, the load's most.
+    Generated as source, as the joins are, with the heads and premises
+    unrolled: this loop runs once per derivation, the load's most.
     """
     namespace: dict[str, object] = {
         "DER": derivations,
@@ -127,39 +126,26 @@ def _recorders(
     }
     recorders = {}
     for compiled in engine._compiled:
-        rule = compiled.rule
-        premises = sum(1 for item in rule.body if isinstance(item, Pattern))
-        heads = [item for item in rule.head if isinstance(item, Pattern)]
-        slots = _slots(rule)
+        premises = sum(1 for item in compiled.rule.body if isinstance(item, Pattern))
+        heads = sum(1 for item in compiled.rule.head if isinstance(item, Pattern))
+        namespace[f"HEADS{compiled.order}"] = compiled.heads
         lines = [
             "def record(out):",
             "    for prem, b in out:",
             f"        prem = ({''.join(f'CANON[prem[{i}]], ' for i in range(premises))})",
             f"        d = ({compiled.order}, prem)",
+            f"        hs = HEADS{compiled.order}(b)",
         ]
-        inline = not any(isinstance(t, Functor) for h in heads for t in h.terms)
-        if inline:
-            made = [f"({', '.join(_term(t, slots, engine) for t in h.terms)})" for h in heads]
-        else:  # a functor in the head (a conflict): built by the engine's own head code
-            namespace[f"HEADS{compiled.order}"] = compiled.heads
-            lines.append(f"        hs = HEADS{compiled.order}(b)")
-            made = [f"hs[{i}]" for i in range(len(heads))]
-        for head in made:
-            lines.append(f"        h = {head}")
+        for i in range(heads):
+            lines.append(f"        h = hs[{i}]")
             lines.append("        h = CANON.get(h) or FRESH.setdefault(h, h)")
             lines.append("        DER[h].add(d)")
-            lines.extend(f"        DEP[prem[{i}]].add(h)" for i in range(premises))
+            lines.extend(f"        DEP[prem[{j}]].add(h)" for j in range(premises))
         scope: dict[str, object] = {}
         source = "\n".join(lines)
         exec(compile(source, f"<bulk record {compiled.label}>", "exec"), namespace, scope)
         recorders[compiled.order] = scope["record"]
     return recorders  # type: ignore[return-value]
-
-
-def _term(term: object, slots: dict[Var, int], engine: RuleEngine) -> str:
-    if isinstance(term, Var):
-        return f"b[{slots[term]}]"
-    return str(engine.terms.id(term))  # type: ignore[arg-type]
 
 
 @contextmanager
