@@ -15,11 +15,12 @@ from pathlib import Path
 
 import pytest
 from owl2cases import ALL, parse, read_cases
-from rdflib import OWL, RDF, Namespace
+from rdflib import OWL, RDF, RDFS, Namespace
 
 from space.reasoning import (
     Origin,
     RuleEngine,
+    build_engine,
     default_registry,
     parse_rules,
     read_graph,
@@ -136,3 +137,16 @@ def test_production_rules_keep_the_incremental_path():
     assert not seminaive.eligible(engine)
     engine.load([(EX.a, EX.p, EX.b)])
     assert (EX.a, EX.q, EX.b) in engine
+
+
+def test_a_hybrid_engines_backward_layer_sees_the_bulk_load_once():
+    text = "[b: (?x ex:seen ex:yes) <- (?x rdf:type ex:Device)]"
+    prefixes = {"ex": str(EX), "rdf": str(RDF)}
+    rules = parse_rules(text, default_registry(), prefixes=prefixes)
+    engine = build_engine(rules, [(EX.Speaker, RDFS.subClassOf, EX.Device)])
+    delta = engine.load([(EX.s, RDF.type, EX.Speaker)])
+    assert (EX.s, EX.seen, EX.yes) in engine
+    assert (EX.s, EX.seen, EX.yes) in {change.triple for change in delta.added}
+    assert not engine.apply()  # nothing left over from the load for the next update
+    engine.apply(removed=[(EX.s, RDF.type, EX.Speaker)])
+    assert (EX.s, EX.seen, EX.yes) not in engine
