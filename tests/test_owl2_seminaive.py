@@ -15,9 +15,10 @@ from pathlib import Path
 
 import pytest
 from owl2cases import ALL, parse, read_cases
-from rdflib import OWL, RDF, RDFS, Namespace
+from rdflib import OWL, RDF, RDFS, Literal, Namespace
 
 from space.reasoning import (
+    Builtin,
     Origin,
     RuleEngine,
     build_engine,
@@ -150,3 +151,31 @@ def test_a_hybrid_engines_backward_layer_sees_the_bulk_load_once():
     assert not engine.apply()  # nothing left over from the load for the next update
     engine.apply(removed=[(EX.s, RDF.type, EX.Speaker)])
     assert (EX.s, EX.seen, EX.yes) not in engine
+
+
+class Boom(Builtin):
+    """Fail on a literal "boom": a builtin that raises in the middle of a load."""
+
+    name = "boom"
+    arity = (1, 1)
+
+    def run(self, ctx, args):
+        if str(ctx.terms.term(args[0])) == "boom":
+            raise ValueError("boom")
+        return args
+
+
+def test_a_load_that_fails_leaves_nothing_and_can_be_done_again():
+    registry = default_registry()
+    registry.register(Boom())
+    text = "[r: (?x ex:p ?y), boom(?y) -> (?x ex:q ?y)]"
+    rules = parse_rules(text, registry, prefixes={"ex": str(EX)})
+    engine = RuleEngine(rules, [(EX.Speaker, RDFS.subClassOf, EX.Device)], registry=registry)
+    assert seminaive.eligible(engine)
+    good = [(EX.a, EX.p, Literal("fine")), (EX.a, RDF.type, EX.Speaker)]
+    with pytest.raises(ValueError, match="boom"):
+        engine.load([*good, (EX.b, EX.p, Literal("boom"))])
+    assert engine.count() == 0
+    engine.load(good)
+    assert (EX.a, EX.q, Literal("fine")) in engine
+    assert (EX.a, RDF.type, EX.Device) in engine

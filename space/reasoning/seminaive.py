@@ -51,7 +51,19 @@ def materialise(engine: RuleEngine, plus: list[T]) -> Delta:
     Returns the load's `Delta`, as `ChangeLog.delta` gives it: every triple added.
     """
     with _collector_paused():
-        return engine._log.fresh(_close(engine, plus))
+        try:
+            order = _close(engine, plus)
+        except BaseException:
+            _empty(engine)  # as the incremental path undoes a failed update: nothing stays
+            raise
+        return engine._log.fresh(order)
+
+
+def _empty(engine: RuleEngine) -> None:
+    """Empty the state in place (compiled joins hold the store's dictionaries)."""
+    store = engine._store
+    for held in (store.triples, store.spo, store.pos, store.osp, engine._asserted):
+        held.clear()
 
 
 def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
