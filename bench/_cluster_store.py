@@ -23,7 +23,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from _harness import free_port, percentile
+from _harness import code_env, free_port, percentile
 from rdflib import Literal, URIRef
 from rdflib.namespace import OWL, RDF
 
@@ -35,8 +35,11 @@ LEVEL = URIRef("https://w3id.org/tspace/selfconfig#batteryLevel")
 
 
 @contextlib.contextmanager
-def replicas(cluster: LocalCluster, workdir: Path, n: int = 3) -> Iterator[list[str]]:
-    """Run `n` replicas of `cluster`; yield their routers' endpoints; stop them after."""
+def replicas(
+    cluster: LocalCluster, workdir: Path, n: int = 3, code: Path | None = None
+) -> Iterator[list[str]]:
+    """Run `n` replicas of `cluster` (from source tree `code` if given); yield their routers'
+    endpoints; stop them after."""
     endpoints = [f"tcp/127.0.0.1:{free_port()}" for _ in range(n)]
     members = ",".join(cluster.endpoints)
     procs = []
@@ -45,7 +48,14 @@ def replicas(cluster: LocalCluster, workdir: Path, n: int = 3) -> Iterator[list[
         cmd = [sys.executable, "-m", "space.cli", "serve", "--listen", endpoint]
         cmd += ["--data", str(data), "--cluster", members]
         log = open(workdir / f"replica{i}.log", "wb")
-        procs.append((subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT), log))
+        proc = subprocess.Popen(
+            cmd,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            env=code_env(code),
+            cwd=str(code) if code is not None else None,
+        )
+        procs.append((proc, log))
     try:
         for endpoint in endpoints:
             _wait_answers(endpoint)
@@ -162,10 +172,14 @@ def embedded_once(seconds: float, inflight: int) -> dict[str, float]:
         return throughput([endpoint], seconds, inflight)
 
 
-def run_once(workdir: Path, seconds: float, inflight: int) -> dict[str, float]:
-    """One run: fresh etcd and replicas; throughput, then failover."""
+def run_once(
+    workdir: Path, seconds: float, inflight: int, code: Path | None = None, *, kill: bool = True
+) -> dict[str, float]:
+    """One run: fresh etcd and replicas (from source tree `code` if given); throughput, then
+    (if `kill`) failover."""
     with LocalCluster(workdir / "etcd") as cluster:
-        with replicas(cluster, workdir) as endpoints:
+        with replicas(cluster, workdir, code=code) as endpoints:
             result = throughput(endpoints, seconds, inflight)
-            result["failover"] = failover(cluster, endpoints, inflight)
+            if kill:
+                result["failover"] = failover(cluster, endpoints, inflight)
     return result
