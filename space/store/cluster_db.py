@@ -29,20 +29,27 @@ from space.store.render import update
 REVISION = ox.NamedNode("urn:tspace:revision")
 
 
-def revision_ops(revision: int) -> list[str]:
-    """Return the SPARQL operations that record the applied etcd revision."""
+def revision_ops(db: StoreDB, revision: int) -> list[str]:
+    """Return the SPARQL operations that record the applied etcd revision.
+
+    The revision held is removed by its exact quad (DELETE DATA): a DELETE
+    WHERE costs Oxigraph ~1.5 ms a commit, which a replica pays for every batch
+    it applies.
+    """
     m, st, r = META.value, STORE.value, REVISION.value
-    return [
-        f"DELETE WHERE {{ GRAPH <{m}> {{ <{st}> <{r}> ?x }} }}",
-        f'INSERT DATA {{ GRAPH <{m}> {{ <{st}> <{r}> "{revision}"^^<{INT.value}> }} }}',
-    ]
+    held = " . ".join(f"<{st}> <{r}> {q.object}" for q in _revisions(db))
+    ops = [f"DELETE DATA {{ GRAPH <{m}> {{ {held} }} }}"] if held else []
+    ops.append(f'INSERT DATA {{ GRAPH <{m}> {{ <{st}> <{r}> "{revision}"^^<{INT.value}> }} }}')
+    return ops
+
+
+def _revisions(db: StoreDB) -> list[ox.Quad]:
+    return list(db.store.quads_for_pattern(STORE, REVISION, None, META))
 
 
 def applied_revision(db: StoreDB) -> int:
     """Return the etcd revision this replica applied last (0: none, a new replica)."""
-    for q in db.store.quads_for_pattern(STORE, REVISION, None, META):
-        return int(q.object.value)
-    return 0
+    return max((int(q.object.value) for q in _revisions(db)), default=0)
 
 
 def space_seqs(db: StoreDB) -> dict[str, int]:
@@ -88,7 +95,7 @@ def replace_all(
         # `update` logs the entry; a re-listed space has no log entry to give.
         ops.append(update([entry], fresh=True))
         ops.append(f"DROP SILENT GRAPH <{log_graph(space).value}>")
-    ops += revision_ops(revision)
+    ops += revision_ops(db, revision)
     try:
         db.store.update(" ;\n".join(ops))
         db.store.flush()

@@ -67,7 +67,7 @@ class ClusterSpace(SpaceState):
         new = {k: v for k, v in bindings.items() if self._applied_prefixes.get(k) != v}
         self._stamps = self._applied_stamps  # type: ignore[assignment]
         try:
-            net = self.install(pack(wire))
+            net = self.install(wire, pack(wire))
         finally:
             self._stamps = ChainMap(self._flying_stamps, self._applied_stamps)  # type: ignore[assignment]
         net.entry.prefixes = new
