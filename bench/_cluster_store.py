@@ -2,7 +2,9 @@
 
 Three etcd members and three `tspace serve --cluster` replicas on this
 machine, each replica behind its own router. One client process keeps
-`inflight` writes in flight (`send_later`), spread over the three replicas;
+`inflight` writes in flight, spread over the three replicas, one per robot: a
+robot sends its next reading as soon as its last is answered (Zenoh callbacks:
+no reply waits behind another's);
 each write is one robot's battery level, a functional property, so each is a
 compare-and-swap in etcd. An ack comes once the replica that took the write
 applied the revision it committed at (docs/cluster.md).
@@ -14,8 +16,8 @@ time from the kill to the first ack of a write sent after it.
 from __future__ import annotations
 
 import asyncio
-import collections
 import contextlib
+import queue
 import signal
 import subprocess
 import sys
@@ -23,11 +25,13 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+import zenoh
 from _harness import code_env, free_port, percentile
 from rdflib import Literal, URIRef
 from rdflib.namespace import OWL, RDF
 
-from space import SpaceError, TripleSpace
+from space import SpaceError, TripleSpace, keys
+from space.changeset import unpack
 from space.store.etcd_client import EtcdClient
 from space.store.etcd_member import LocalCluster
 
@@ -85,29 +89,55 @@ def _wait_answers(endpoint: str, timeout: float = 30) -> None:
             time.sleep(0.1)
 
 
+class _Answer:
+    """One write in flight: when its reply came, and whether it was an acknowledgement."""
+
+    def __init__(self, robot: int, acks: list, refused: list, free: queue.SimpleQueue) -> None:
+        self.robot, self.acks, self.refused, self.free = robot, acks, refused, free
+        self.sent = time.monotonic()
+        self.acked = 0.0
+
+    def reply(self, reply: zenoh.Reply) -> None:
+        if reply.ok is not None and "seq" in (unpack(reply.ok.payload.to_bytes()) or {}):
+            self.acked = time.monotonic()
+
+    def done(self) -> None:  # every reply is in
+        (self.acks.append((self.sent, self.acked)) if self.acked else self.refused.append(1))
+        self.free.put(self.robot)
+
+
 def write(
     handles: list[TripleSpace], seconds: float, inflight: int, acks: list, first: int = 0
 ) -> int:
-    """Keep `inflight` writes in flight for `seconds`; record (sent, acked); return failures."""
-    flying: collections.deque = collections.deque()
-    failures = 0
+    """Keep `inflight` robots writing for `seconds`, each its next reading once its last is
+    answered (no reply waits behind another's); record (sent, acked); return failures."""
+    free: queue.SimpleQueue = queue.SimpleQueue()
+    for robot in range(inflight):
+        free.put(robot)
+    refused: list[int] = []
+    key = keys.service_key("bench", "write")
     stop = time.monotonic() + seconds
     n = first
-    while time.monotonic() < stop or flying:
-        while time.monotonic() < stop and len(flying) < inflight:
-            r = n % inflight  # a robot talks to its own host's replica
-            ts = handles[r % len(handles)]
-            robot = URIRef(f"http://ex.org/robot{r}")
-            cs = ts.changeset([(robot, LEVEL, Literal(n))])
-            flying.append((time.monotonic(), ts.send_later(cs, timeout=5)))
-            n += 1
-        sent, pending = flying.popleft()
+    while time.monotonic() < stop:
         try:
-            pending.result()
-            acks.append((sent, time.monotonic()))
-        except SpaceError:
-            failures += 1
-    return failures
+            r = free.get(timeout=max(0.0, stop - time.monotonic()))
+        except queue.Empty:
+            break
+        ts = handles[r % len(handles)]  # a robot talks to its own host's replica
+        cs = ts.changeset([(URIRef(f"http://ex.org/robot{r}"), LEVEL, Literal(n))])
+        answer = _Answer(r, acks, refused, free)
+        ts.session.get(
+            key,
+            zenoh.handlers.Callback(answer.reply, answer.done),
+            payload=cs.encode(),
+            timeout=5,
+            consolidation=zenoh.ConsolidationMode.NONE,
+            congestion_control=zenoh.CongestionControl.BLOCK,
+        )
+        n += 1
+    for _ in range(inflight):  # every robot's last write answered (or timed out)
+        free.get(timeout=10)
+    return len(refused)
 
 
 def throughput(endpoints: list[str], seconds: float, inflight: int) -> dict[str, float]:
