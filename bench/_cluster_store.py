@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
 import queue
 import signal
 import subprocess
@@ -41,9 +42,9 @@ LEVEL = URIRef("https://w3id.org/tspace/selfconfig#batteryLevel")
 @contextlib.contextmanager
 def replicas(
     cluster: LocalCluster, workdir: Path, n: int = 3, code: Path | None = None
-) -> Iterator[list[str]]:
+) -> Iterator[tuple[list[str], list[int]]]:
     """Run `n` replicas of `cluster` (from source tree `code` if given); yield their routers'
-    endpoints; stop them after."""
+    endpoints and pids; stop them after."""
     endpoints = [f"tcp/127.0.0.1:{free_port()}" for _ in range(n)]
     members = ",".join(cluster.endpoints)
     procs = []
@@ -63,7 +64,7 @@ def replicas(
     try:
         for endpoint in endpoints:
             _wait_answers(endpoint)
-        yield endpoints
+        yield endpoints, [proc.pid for proc, _ in procs]
     finally:
         for proc, _ in procs:
             proc.send_signal(signal.SIGTERM)
@@ -140,23 +141,40 @@ def write(
     return len(refused)
 
 
-def throughput(endpoints: list[str], seconds: float, inflight: int) -> dict[str, float]:
+def cpu_seconds(pids: list[int]) -> float:
+    """Return the CPU time (user + system) processes `pids` have used so far."""
+    total = 0
+    for pid in pids:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        total += int(fields[11]) + int(fields[12])  # utime, stime
+    return total / os.sysconf("SC_CLK_TCK")
+
+
+def throughput(
+    endpoints: list[str], seconds: float, inflight: int, pids: dict[str, list[int]] | None = None
+) -> dict[str, float]:
+    """Measure; with `pids` ({"replicas": [...], "etcd": [...]}), also their CPU per ack."""
     handles = [TripleSpace.open(e, space="bench", agent="bench") for e in endpoints]
+    pids = pids or {}
     try:
         handles[0].write([(LEVEL, RDF.type, OWL.FunctionalProperty)])
         write(handles, 1.0, inflight, [])  # warm up
         acks: list[tuple[float, float]] = []
+        cpu = {name: cpu_seconds(p) for name, p in pids.items()}
         began = time.monotonic()
         failures = write(handles, seconds, inflight, acks, first=10**6)
         elapsed = time.monotonic() - began
         latencies = [(b - a) * 1e3 for a, b in acks]
-        return {
+        result = {
             "rate": len(acks) / elapsed,
             "p50": percentile(latencies, 50),
             "p99": percentile(latencies, 99),
             "failed": failures,
             "latencies": latencies,  # type: ignore[dict-item]
         }
+        for name, p in pids.items():  # CPU ms per acknowledged changeset
+            result[f"cpu {name}"] = (cpu_seconds(p) - cpu[name]) * 1e3 / max(1, len(acks))
+        return result
     finally:
         for h in handles:
             h.close()
@@ -208,8 +226,9 @@ def run_once(
     """One run: fresh etcd and replicas (from source tree `code` if given); throughput, then
     (if `kill`) failover."""
     with LocalCluster(workdir / "etcd") as cluster:
-        with replicas(cluster, workdir, code=code) as endpoints:
-            result = throughput(endpoints, seconds, inflight)
+        with replicas(cluster, workdir, code=code) as (endpoints, pids):
+            members = [proc.pid for proc in cluster.procs.values()]
+            result = throughput(endpoints, seconds, inflight, {"replicas": pids, "etcd": members})
             if kill:
                 result["failover"] = failover(cluster, endpoints, inflight)
     return result
