@@ -146,7 +146,7 @@ class RuleEngine(EngineReads):
         if not self._loaded:
             plus = self._ontology + plus
         self._log.begin(plus, minus)
-        self._firings = []
+        self._firings.clear()
         self._agenda.reset()
         try:
             self._unassert(minus, notify=True)
@@ -169,7 +169,7 @@ class RuleEngine(EngineReads):
     def _apply_monotonic(self, plus: list[T], minus: list[T]) -> Delta:
         """Apply a change with production rules off: after a loop, the caller's triples stay."""
         self._log.begin(plus, minus)
-        self._firings = []
+        self._firings.clear()
         self._production = False
         try:
             self._unassert(minus, notify=True)
