@@ -7,9 +7,10 @@ One measurement times one update (battery level "normal" -> "very low") and
 reading the matches (the mobile base's triples, N of them now "low") on a
 prepared engine (loaded, then the update reverted untimed), with the garbage
 collector as the reasoner agent runs it (start frozen). Also: an update no
-rule's trigger matches, with 1,000 rules loaded; building an engine for N rules
-the first time in a process and again (the compiled rules are reused, `rulecode`);
-and loading the project's ontology with its OWL RL closure.
+rule's trigger matches, with 1,000 rules loaded; building the project's engine and
+an engine for N rules, each the first time in a process and again (a reload: the
+compiled rules are reused, `rulecode`); and loading the project's ontology with its
+OWL RL closure.
 
 Run: python bench/rules_scaling.py [--runs 30] [--sizes 1 200 1000] [--jena] [--old DIR]
                                    [--rounds 3] [--cpu] [--json] [--no-plot]
@@ -164,6 +165,16 @@ def measure_builds(n: int, runs: int) -> tuple[list[float], list[float]]:
     return first, [timed(lambda: built_engine(n)) for _ in range(runs)]
 
 
+def measure_project_builds(runs: int) -> tuple[list[float], list[float]]:
+    """Time building the project's engine (paper.rules, the ontology): first, then again."""
+
+    def build() -> None:
+        engine_from_files(rules=[ROOT / "rules" / "paper.rules"], ontology=[ONTOLOGY])
+
+    first = [timed(build)]
+    return first, [timed(build) for _ in range(runs)]
+
+
 def measure_load(runs: int) -> list[float]:
     """Time building an engine for the project's ontology and loading the robot."""
     robot = read_graph([ROBOT])
@@ -176,8 +187,11 @@ def measure_load(runs: int) -> list[float]:
 
 def child(sizes: list[int], runs: int) -> None:
     """Measure every case on this interpreter's `space`; print raw samples as JSON lines."""
-    first, again = measure_builds(max(sizes), max(2, runs // 5))  # first: nothing compiled yet
+    project, reloads = measure_project_builds(max(2, runs // 5))  # first: nothing compiled yet
+    first, again = measure_builds(max(sizes), max(2, runs // 5))
     cases: list[tuple[str, int | None, list[float]]] = [
+        ("project build", None, project),
+        ("project rebuild", None, reloads),
         ("build", max(sizes), first),
         ("rebuild", max(sizes), again),
     ]
@@ -302,13 +316,15 @@ def report(results: dict[tuple, dict], sizes: list[int], as_json: bool, clock: s
         "unrelated": f"An update no rule's trigger matches, {UNRELATED_RULES} rules loaded",
         "build": f"Build an engine for {max(sizes)} rules + the ontology, first in its process",
         "rebuild": "The same build again in that process (compiled rules reused)",
+        "project build": "Build the project's engine (selfconfig.ttl, paper.rules), first",
+        "project rebuild": "The same build again (a reload of the same rules: compiled reused)",
         "load": "Build the engine for ontology/selfconfig.ttl + paper.rules, load hospital.ttl",
     }
     for case, title in titles.items():
         print(f"\n{title} ({clock} ms)")
         print(f"{'code':>6} {'p50':>10} {'p99':>10} {'min':>10} {'max':>10} {'runs':>5}")
         for code in codes:
-            stats = results.get((code, case, max(sizes) if "build" in case else None))
+            stats = results.get((code, case, max(sizes) if case in ("build", "rebuild") else None))
             if case == "unrelated":
                 stats = results.get((code, case, UNRELATED_RULES))
             if stats:
