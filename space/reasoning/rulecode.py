@@ -107,7 +107,7 @@ def code_of(rule: Rule, form: Shape) -> RuleCode:
         },
     )
     if len(_CODE) >= _LIMIT:
-        del _CODE[next(iter(_CODE))]
+        _CODE.pop(next(iter(_CODE)), None)
     _CODE[form.key] = code
     return code
 
