@@ -14,7 +14,9 @@ Latency (milliseconds) is from the start, the hw_monitor's HLC timestamp on its
 changeset (Zenoh's, from the wall clock all processes on a host share), to the moment
 the last of the three has *acted*: its changeset committed by the store and published,
 stamped on the wall clock when the bench's plain Zenoh subscriber on `@/changes`
-receives it. The reasoner's column is stamped the same way. The simulated drivers
+receives it. The reasoner's column is stamped the same way. The bench follows the
+space in the changesets' own N-Triples texts (msgpack, no rdflib term), so that it
+takes as little CPU as it can from the processes it measures. The simulated drivers
 switch modes at once here (`--switch-delay 0`): what is measured is the software, not
 a simulated power-up. Each run is undone before the next (charge back to 60 %, task
 back to Idle).
@@ -55,9 +57,9 @@ from _harness import OUT, code_env, median, percentile, print_table, serve_proce
 from rdflib import Graph, Literal, Namespace, URIRef
 from rules_scaling import PAPER, paper_rules
 
-from agents.view import View
-from space import Change, TripleSpace, load_identity
+from space import TripleSpace, load_identity
 from space.changeset import hlc_key
+from space.terms import to_nt
 
 ROOT = Path(__file__).resolve().parent.parent
 AC = Namespace("https://w3id.org/tspace/selfconfig#")
@@ -65,7 +67,6 @@ SPACE = "e2e"
 ROBOT, BATTERY, BASE = AC.robot1, AC.robot1_battery, AC.robot1_base
 INTERACTION = (AC.robot1_screen, AC.robot1_speakers, AC.robot1_microphone)
 HW, NAV, BEHAVIOR = "hw_monitor.robot1", "nav_monitor.robot1", "behavior.robot1"
-VERY_LOW = (BATTERY, AC.battery_level, Literal("very low"))
 ACTORS = ("behaviour", "nav", "hw")
 STAGES = ("reasoner built", "reasoner", *ACTORS)  # the table's p50 columns, in path order
 
@@ -138,52 +139,89 @@ def agents(commands: dict[str, list[str]], logs: Path, code: Path | None = None)
                 proc.wait()
 
 
-def seconds(change: Change) -> float:
+def nt(term: object) -> str:
+    """Return a term's N-Triples text, the form the bench compares changes in."""
+    return to_nt(term)  # type: ignore[arg-type]
+
+
+TEXT = {
+    name: nt(term)
+    for name, term in {
+        "robot": ROBOT,
+        "battery": BATTERY,
+        "base": BASE,
+        "battery_level": AC.battery_level,
+        "very low": Literal("very low"),
+        "normal": Literal("normal"),
+        "task_started": AC.task_started,
+        "current_task": AC.current_task,
+        "task_idle": AC.task_idle,
+        "target_place": AC.target_place,
+        "speed_limit": AC.speed_limit,
+        "actual_mode": AC.actual_mode,
+        "stand-by": Literal("stand-by"),
+        "active": Literal("active"),
+    }.items()
+}
+DEVICES = [nt(d) for d in INTERACTION]
+
+
+def number(text: str | None) -> float | None:
+    """Return the number an N-Triples literal's text holds, None if none."""
+    if text is None or not text.startswith('"'):
+        return None
+    try:
+        return float(text[1 : text.index('"', 1)])
+    except ValueError:
+        return None
+
+
+def seconds(wire: dict) -> float:
     """Return the wall-clock time of a changeset's HLC timestamp, in seconds."""
-    return hlc_key(change.timestamp)[0] / 2**32
+    return hlc_key(wire["ts"])[0] / 2**32
 
 
 @dataclass
 class Run:
     """One very low battery, followed from the hw_monitor's write to the agents' published acts.
 
-    `arrival(id)` is when the bench received a changeset the store published (wall clock, s).
+    Fed the changesets the store published (their wire maps, N-Triples texts: the
+    bench makes no rdflib term while it measures) with when each arrived (s).
     """
 
-    arrival: Callable[[str], float]
     start: float | None = None
     start_id: str = ""
     reasoner: float | None = None
     acted: dict[str, float] = field(default_factory=dict)
     built: dict[str, float] = field(default_factory=dict)  # HLC time of what was published
-    standby: dict[object, tuple[float, float]] = field(default_factory=dict)
+    standby: dict[str, tuple[float, float]] = field(default_factory=dict)
 
-    def feed(self, change: Change) -> None:
-        """Take note of what a changeset of the space says about this run."""
-        added = set(change.added)
+    def feed(self, wire: dict, arrival: float) -> None:
+        """Take note of what a published changeset says about this run."""
+        agent, t = wire.get("agent"), TEXT
+        added = [tuple(x) for x in wire.get("add") or ()]
         if self.start is None:
-            if change.agent == HW and VERY_LOW in added:
-                self.start, self.start_id = seconds(change), change.id
+            if agent == HW and (t["battery"], t["battery_level"], t["very low"]) in added:
+                self.start, self.start_id = seconds(wire), wire["id"]
             return
-        if change.agent == "reasoner" and change.cause == self.start_id:
-            self.reasoner = self.arrival(change.id)
-            self.built["reasoner"] = seconds(change)
-        elif change.agent == BEHAVIOR and any(p == AC.task_started for _, p, _ in added):
-            self._acted("behaviour", change)
-        elif change.agent == NAV and any(
-            p == AC.speed_limit and float(o) == 0.3 for s, p, o in added if s == BASE
+        if agent == "reasoner" and wire.get("cause") == self.start_id:
+            self.reasoner, self.built["reasoner"] = arrival, seconds(wire)
+        elif agent == BEHAVIOR and any(p == t["task_started"] for _, p, _ in added):
+            self._acted("behaviour", wire, arrival)
+        elif agent == NAV and any(
+            s == t["base"] and p == t["speed_limit"] and number(o) == 0.3 for s, p, o in added
         ):
-            self._acted("nav", change)
-        elif change.agent == HW:
-            for device in INTERACTION:
-                if (device, AC.actual_mode, Literal("stand-by")) in added:
-                    self.standby.setdefault(device, (self.arrival(change.id), seconds(change)))
-            if len(self.standby) == len(INTERACTION) and "hw" not in self.acted:
+            self._acted("nav", wire, arrival)
+        elif agent == HW:
+            for device in DEVICES:
+                if (device, t["actual_mode"], t["stand-by"]) in added:
+                    self.standby.setdefault(device, (arrival, seconds(wire)))
+            if len(self.standby) == len(DEVICES) and "hw" not in self.acted:
                 self.acted["hw"], self.built["hw"] = max(self.standby.values())
 
-    def _acted(self, name: str, change: Change) -> None:
+    def _acted(self, name: str, wire: dict, arrival: float) -> None:
         if name not in self.acted:
-            self.acted[name], self.built[name] = self.arrival(change.id), seconds(change)
+            self.acted[name], self.built[name] = arrival, seconds(wire)
 
     @property
     def done(self) -> bool:
@@ -210,43 +248,37 @@ class Run:
 
 
 class Observer:
-    """The bench's copy of the space, kept by a subscription; changes are applied in order.
+    """The bench's copy of the space, in N-Triples texts, from what the store publishes.
 
-    Beside it, a plain Zenoh subscriber on what the store publishes stamps each
-    changeset's arrival in its callback, before anything is decoded: the time an
-    act was published, not when the bench got round to reading it.
+    A plain Zenoh subscriber on `@/changes` stamps each changeset's arrival in its
+    callback; the bench's thread decodes them (msgpack only) in seq order. So the
+    bench competes with the processes it measures as little as it can.
     """
 
     def __init__(self, session: zenoh.Session) -> None:
-        self.view = View()
         self.writers: set[str] = set()
-        self._inbox: queue.SimpleQueue[Change] = queue.SimpleQueue()
-        self._arrived: dict[str, float] = {}
+        self.state: dict[tuple[str, str], set[str]] = {}  # (s, p) -> objects
+        self.seq = 0
         self._raw: queue.SimpleQueue[tuple[float, bytes]] = queue.SimpleQueue()
         self._sub = session.declare_subscriber(
             f"tspace/{SPACE}/@/changes",
             lambda sample: self._raw.put((time.time(), sample.payload.to_bytes())),
         )
 
+    def load(self, ts: TripleSpace) -> None:
+        """Start from the space's state (read after subscribing: no change falls between)."""
+        graph, self.seq = ts.snapshot()
+        for s, p, o in graph:
+            self.state.setdefault((nt(s), nt(p)), set()).add(nt(o))
+
     def close(self) -> None:
-        """Stop stamping arrivals."""
+        """Stop watching."""
         self._sub.undeclare()
 
-    def arrival(self, change_id: str) -> float:
-        """Return when the changeset `change_id` arrived as published (wall clock, seconds)."""
-        while change_id not in self._arrived:
-            try:
-                at, payload = self._raw.get(timeout=5.0)
-            except queue.Empty:
-                raise SystemExit(
-                    f"end_to_end: changeset {change_id} never seen published"
-                ) from None
-            self._arrived[msgpack.unpackb(payload)["id"]] = at
-        return self._arrived[change_id]
-
-    def on_change(self, change: Change) -> None:
-        """Queue a change (called on the space's dispatcher thread: never block there)."""
-        self._inbox.put(change)
+    def value(self, s: str, p: str) -> str | None:
+        """Return the one object of (s, p), None if none (or several)."""
+        objects = self.state.get((s, p), set())
+        return next(iter(objects)) if len(objects) == 1 else None
 
     def until(
         self,
@@ -255,35 +287,60 @@ class Observer:
         timeout: float = 30.0,
         run: Run | None = None,
     ) -> None:
-        """Apply changes (feeding `run`) until `condition()` holds.
+        """Apply published changes (feeding `run`) until `condition()` holds.
 
         Raises:
-            SystemExit: it did not hold within `timeout` seconds.
+            SystemExit: it did not hold within `timeout` seconds, or a change went missing.
         """
         deadline = time.monotonic() + timeout
         while not condition():
             try:
-                change = self._inbox.get(timeout=max(0.0, deadline - time.monotonic()))
+                arrival, payload = self._raw.get(timeout=max(0.0, deadline - time.monotonic()))
             except queue.Empty:
                 raise SystemExit(f"end_to_end: no {what} within {timeout:g} s") from None
-            self.view.apply(change)
-            self.writers.add(change.agent)
-            if run is not None:
-                run.feed(change)
-        if run is None:
-            self._arrived.clear()  # arrivals between runs are not looked up
-            while not self._raw.empty():
-                self._raw.get_nowait()
+            self._take(arrival, payload, run)
+
+    def settle(self, quiet: float = 0.05) -> None:
+        """Apply changes until none came for `quiet` seconds: the last run's echoes are over."""
+        while True:
+            try:
+                arrival, payload = self._raw.get(timeout=quiet)
+            except queue.Empty:
+                return
+            self._take(arrival, payload, None)
+
+    def _take(self, arrival: float, payload: bytes, run: Run | None) -> None:
+        """Apply one published changeset, in seq order, and feed it to `run`.
+
+        Raises:
+            SystemExit: a change before it was not seen.
+        """
+        wire = msgpack.unpackb(payload)
+        if wire["seq"] <= self.seq:
+            return  # in the state loaded
+        if wire["seq"] != self.seq + 1:
+            raise SystemExit(f"end_to_end: change {self.seq + 1} not seen")
+        self.seq = wire["seq"]
+        self._apply(wire)
+        if run is not None:
+            run.feed(wire, arrival)
+
+    def _apply(self, wire: dict) -> None:
+        self.writers.add(wire.get("agent") or "")
+        for s, p, o in wire.get("del") or ():
+            self.state.get((s, p), set()).discard(o)
+        for s, p, o in wire.get("add") or ():
+            self.state.setdefault((s, p), set()).add(o)
 
     def at_rest(self) -> bool:
         """Return whether the robot is back where every run starts."""
-        v = self.view
+        t = TEXT
         return (
-            v.text(BATTERY, AC.battery_level) == "normal"
-            and v.value(ROBOT, AC.current_task) == AC.task_idle
-            and v.value(ROBOT, AC.target_place) is None
-            and v.number(BASE, AC.speed_limit) == 0.7
-            and all(v.text(d, AC.actual_mode) == "active" for d in INTERACTION)
+            self.value(t["battery"], t["battery_level"]) == t["normal"]
+            and self.value(t["robot"], t["current_task"]) == t["task_idle"]
+            and not self.state.get((t["robot"], t["target_place"]))
+            and number(self.value(t["base"], t["speed_limit"])) == 0.7
+            and all(self.value(d, t["actual_mode"]) == t["active"] for d in DEVICES)
         )
 
 
@@ -324,23 +381,26 @@ def measure(
         serve_process(code, secure=secure) as (endpoint, _pid),
         TripleSpace.open(endpoint, space=SPACE, agent="bench", identity=identity) as ts,
     ):
-        observer = Observer(ts.session)
         ts.write(stage(rule_set))
-        ts.subscribe(None, observer.on_change, snapshot=True)
+        observer = Observer(ts.session)
+        observer.load(ts)
         with agents(agent_commands(endpoint, rules, secure), logs, code):
             observer.until(
                 lambda: {"reasoner", HW, NAV, BEHAVIOR} <= observer.writers and observer.at_rest(),
                 "start of the agents",
             )
+            observer.settle()
             results = []
             for _ in range(runs):
-                run = Run(observer.arrival)
+                run = Run()
                 ts.write([(BATTERY, AC.charge_percent, Literal(5))])
                 observer.until(lambda run=run: run.done, "reaction to very low", run=run)
                 results.append(run.latencies())
                 ts.write([(BATTERY, AC.charge_percent, Literal(60))])
                 observer.until(
-                    lambda: observer.view.text(BATTERY, AC.battery_level) == "normal",
+                    lambda: (
+                        observer.value(TEXT["battery"], TEXT["battery_level"]) == TEXT["normal"]
+                    ),
                     "normal battery",
                 )
                 ts.apply(
@@ -350,6 +410,7 @@ def measure(
                     + [(BASE, s, Literal("low")) for s in settings],
                 )
                 observer.until(observer.at_rest, "robot back at rest")
+                observer.settle()  # what answers the reset (the reasoner's, the agents') is over
         observer.close()
     return results
 

@@ -2,8 +2,10 @@
 
 Run: python bench/space_bench.py [--runs 5] [--store] [--old DIR --plot docs/store-bench.png]
 With --old (a worktree of the code before: `git worktree add /tmp/old a5d5dd9`) every run
-measures the server from that tree and from this one, interleaved; the clients are this tree's
-(the wire format is compatible both ways), so the difference is the store's.
+measures the server from that tree and from this one, interleaved; the latency's writer and
+subscriber run from the same tree as the server (the client's path is part of that figure),
+the other clients are this tree's (the wire format is compatible both ways), so the rest of
+the difference is the store's. `--latency-only`: only the write -> notification latency.
 Every figure is a median over runs; the store, the subscriber and the writer
 are separate processes talking through the router on loopback.
 """
@@ -18,7 +20,7 @@ from collections import deque
 from pathlib import Path
 
 import _store_measures as store
-from _harness import median, percentile, print_table, serve_process
+from _harness import code_env, median, percentile, print_table, serve_process
 from rdflib import Literal, Namespace, URIRef
 
 from space import Pending, TripleSpace
@@ -34,24 +36,22 @@ THROUGHPUT = {
 }
 
 
-def latency(endpoint: str, space: str, count: int, nowait: bool) -> tuple[float, float]:
-    """Return p50, p99 (ms) from a write starting to the subscriber process receiving it."""
+def latency(
+    endpoint: str, space: str, count: int, nowait: bool, code: Path | None = None
+) -> tuple[float, float]:
+    """Return p50, p99 (ms) from a write starting to the subscriber process receiving it.
+
+    The writer and the subscriber are processes running from `code` (default this tree).
+    """
+    child = [sys.executable, str(BENCH / "_latency_subscriber.py")]
+    env = code_env(code)
     sub = subprocess.Popen(
-        [sys.executable, str(BENCH / "_latency_subscriber.py"), endpoint, space],
-        stdout=subprocess.PIPE,
-        text=True,
+        [*child, "subscribe", endpoint, space], stdout=subprocess.PIPE, text=True, env=env
     )
     assert sub.stdout is not None
     assert sub.stdout.readline().strip() == "ready"
-    with TripleSpace.open(endpoint, space=space, agent="bench") as ts:
-        for i in range(count):
-            triple = (EX[f"s{i % 10}"], T, Literal(time.monotonic_ns()))
-            if nowait:
-                ts.write_nowait([triple])
-                time.sleep(0.002)  # one changeset at a time, as a sensor would
-            else:
-                ts.write([triple])
-        ts.write([(EX.end, T, Literal(-1))])
+    mode = ["nowait"] if nowait else []
+    subprocess.run([*child, "write", endpoint, space, str(count), *mode], check=True, env=env)
     delays = [int(x) / 1e6 for x in sub.stdout.readline().split()]
     sub.wait(timeout=10)
     return percentile(delays, 50), percentile(delays, 99)
@@ -127,9 +127,11 @@ def measure(endpoint: str, pid: int, code: Path | None, run: int, args) -> dict[
             )
             rows["store RSS holding those 1,000,000 triples (MB)"] = store.rss_mb(pid)
         return rows
-    p50, p99 = latency(endpoint, f"lat{run}", args.count, nowait=False)
+    p50, p99 = latency(endpoint, f"lat{run}", args.count, nowait=False, code=code)
     rows["latency write()->notify p50 (ms)"] = p50
     rows["latency write()->notify p99 (ms)"] = p99
+    if args.latency_only:
+        return rows
     for mode in ("acked", "pipelined"):
         rows[f"throughput, {THROUGHPUT[mode]} of 100 (triples/s)"] = throughput(
             endpoint, f"thr{mode}{run}", 200, 100, mode
@@ -185,6 +187,9 @@ def main() -> None:
         "(the new tree only)",
     )
     parser.add_argument("--plot", type=Path, help="write a PNG of new vs old here")
+    parser.add_argument(
+        "--latency-only", action="store_true", help="only the write -> notification latency"
+    )
     args = parser.parse_args()
     codes: dict[str, Path | None] = {"new": None}
     if args.old is not None:
