@@ -23,7 +23,7 @@ from rdflib import BNode, Literal, URIRef
 
 from space import keys
 from space._parts import Part, split, term_chunk
-from space._subscription import LATEST, Callback, Change, Dispatcher, Fetch, Subscription
+from space._subscription import BURST, LATEST, Callback, Change, Dispatcher, Fetch, Subscription
 from space.changeset import Changeset, published_seq, unpack
 from space.errors import InputError, MalformedPayload, SpaceError
 from space.prefixes import PrefixMap
@@ -98,6 +98,8 @@ class ScopedSubscription(Subscription):
         prev = wire.get("prev")
         if not isinstance(prev, int) or isinstance(prev, bool) or not 0 <= prev < seq:
             raise MalformedPayload(f"a published part has a 'prev' below its seq, got {prev!r}")
+        count = wire.get("n")  # optional: how many parts its changeset was cut into
+        self.bursting = isinstance(count, int) and count >= BURST
         known = max(self.last_seq, self._last.get(key, 0))
         if seq <= known:
             return []
