@@ -54,6 +54,7 @@ SIZES = (1, 10, 25, 50)
 # sends it to a dock, a bigger answer than the ones after, so the changes measured are of
 # the same kind whatever the fleet's size.
 WARMUP_CYCLES = 2
+DRAIN = 120.0  # seconds the sustained run waits, after the fleet stops, for the last changes
 
 
 @contextmanager
@@ -119,10 +120,14 @@ def sustained(seconds: float, robots: int, hz: float, log: Path, code: Path | No
         try:
             rate = fleet.play(seconds, robots * hz)
             sent, markers = fleet.sent, fleet.markers
+            played = time.monotonic()
+            # A saturated store drains its backlog after the fleet stops: what has not
+            # arrived within DRAIN seconds counts as lost.
             obs.wait(
                 lambda: sent.keys() <= obs.arrived.keys() and markers.keys() <= obs.answered.keys(),
-                30,
+                DRAIN,
             )
+            drained = time.monotonic() - played
         finally:
             done.set()
             sampler.join()
@@ -131,6 +136,7 @@ def sustained(seconds: float, robots: int, hz: float, log: Path, code: Path | No
     seqs = sorted(obs.at_seq)
     return {
         "rate": rate,
+        "drain": drained,
         "sent": len(sent),
         "lost": len(sent) - len(applied),
         "seq_gaps": seqs[-1] - seqs[0] + 1 - len(seqs),
@@ -284,6 +290,7 @@ def main(args: argparse.Namespace) -> None:
                 load["rate"],
                 load["sent"],
                 load["lost"],
+                load["drain"],
                 load["seq_gaps"],
                 load["unanswered"],
                 p50,
@@ -303,6 +310,7 @@ def main(args: argparse.Namespace) -> None:
                 "rate_per_s": load["rate"],
                 "sent": load["sent"],
                 "lost": load["lost"],
+                "drain_s": load["drain"],
                 "unanswered": load["unanswered"],
             }
         )
@@ -315,6 +323,7 @@ def main(args: argparse.Namespace) -> None:
             "changesets/s",
             "sent",
             "lost",
+            "drained after (s)",
             "seq gaps",
             "unanswered",
             "answer p50 (ms)",

@@ -23,9 +23,9 @@ class Publisher:
     """Publish on a session; writer thread only (`heartbeat` from any thread).
 
     Each space's whole changesets and heartbeat go out on publishers declared once
-    (as Zenoh means a stream of puts on one key); a whole changeset is `express`:
-    sent at once, not held for a batch, as every agent waits for it. `close`
-    undeclares them all.
+    (as Zenoh means a stream of puts on one key). Not `express`: at 2,000 changesets/s
+    a message per write cost the store a third of its rate (bench/fleet.py), and alone
+    it gained nothing measurable. `close` undeclares them all.
     """
 
     def __init__(self, session: zenoh.Session, root: str) -> None:
@@ -66,7 +66,6 @@ class Publisher:
                 publisher = self._streams[(space, service)] = self.session.declare_publisher(
                     keys.service_key(space, service, self.root),
                     congestion_control=zenoh.CongestionControl.BLOCK,
-                    express=service == "changes",
                 )
             return publisher
 
