@@ -3,7 +3,8 @@
 It declares one Zenoh subscriber per selector on `@/changes/<s>/<p>` (see
 `space._parts`) and delivers the parts it receives as `Change`s: the parts of
 one changeset that arrive together (the store publishes them in one burst) as
-one, a part that comes late as another with the same id and seq. Per key, it
+one, a part that comes late as another with the same id and seq; after a part of
+a changeset of many (`n`), the dispatcher waits a little for the rest. Per key, it
 remembers the seq of the last part delivered; the store's `prev` says which
 seq it should be. When `prev` names one it never saw
 (past `last_seq`, up to which it holds everything selected), it fetches the
