@@ -146,11 +146,12 @@ def measure(endpoint: str, pid: int, code: Path | None, run: int, args) -> dict[
         )
         for name, seconds in store.sparql_times(endpoint, space, 3).items():
             rows[f"SPARQL on 100k: {name} (ms)"] = seconds * 1000
-        took, w50, w99, wmax = store.writes_beside_a_slow_query(endpoint)
+        took, beside, alone = store.writes_beside_a_slow_query(endpoint)
         rows["a slow query's duration (s)"] = took
-        rows["100 acked writes beside it, p50 (ms)"] = w50
-        rows["100 acked writes beside it, p99 (ms)"] = w99
-        rows["100 acked writes beside it, max (ms)"] = wmax
+        for label, delays in (("beside it", beside), ("alone, just before it", alone)):
+            rows[f"100 acked writes {label}, p50 (ms)"] = percentile(delays, 50)
+            rows[f"100 acked writes {label}, p99 (ms)"] = percentile(delays, 99)
+            rows[f"100 acked writes {label}, max (ms)"] = max(delays)
         name = f"tspace write of {args.bulk:,} triples (triples/s)"
         if code is not None and args.bulk > 100_000:
             # the old `tspace write` sends one changeset, which its store refuses above 100,000
