@@ -2,7 +2,6 @@
 
 import threading
 import time
-from pathlib import Path
 
 import pytest
 from rdflib import Literal, Namespace
@@ -76,50 +75,3 @@ def test_a_query_that_cannot_be_stopped_is_answered_at_its_limit_and_writes_go_o
         # writes were not queued behind the runaway (generous bound: a loaded CI machine)
         assert sorted(delays)[int(len(delays) * 0.99) - 1] < 0.5, delays
         assert len(writer.query((AC.w, AC.n, None))) == 50
-
-
-def _niceness(pid: int) -> list[int]:
-    """Return the nice value of each thread of a process (field 19 of /proc/PID/task/TID/stat)."""
-    found = []
-    for stat in Path(f"/proc/{pid}/task").glob("*/stat"):
-        try:
-            found.append(int(stat.read_text().rsplit(")", 1)[1].split()[16]))
-        except (OSError, IndexError, ValueError):  # the thread ended meanwhile
-            continue
-    return found
-
-
-@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="reads threads' priority in /proc")
-def test_a_long_query_yields_the_cpu_to_the_writer_and_short_reads_do_not(tmp_path):
-    srv = Server(tmp_path / "data", "--query-timeout", "1")
-    srv.start()
-    try:
-        assert srv.proc is not None
-        pid = srv.proc.pid
-        with TripleSpace.open(srv.endpoint, space="big") as ts:
-            ts.write([(AC[f"s{i}"], AC.n, Literal(i)) for i in range(300)])
-            for _ in range(20):  # short reads: none is left at a lower priority
-                ts.query((AC.s1, None, None))
-            assert 10 not in _niceness(pid)
-            outcome: list = []
-            thread = threading.Thread(target=lambda: outcome.append(_run_counted(ts)))
-            thread.start()
-            deadline = time.monotonic() + 5
-            while 10 not in _niceness(pid):
-                assert time.monotonic() < deadline, "the long query's thread kept its priority"
-                time.sleep(0.01)
-            thread.join(30)
-            assert outcome == ["time limit"]
-            # the runaway's thread alone (it runs on until Oxigraph returns); the writer keeps 0
-            assert _niceness(pid).count(10) == 1
-            ts.write([(AC.after, AC.n, Literal(1))])
-    finally:
-        srv.stop()
-
-
-def _run_counted(ts: TripleSpace) -> str:
-    try:
-        ts.query_sparql(COUNTED, timeout=30)
-        return "answered"
-    except QueryTimeLimit:
-        return "time limit"

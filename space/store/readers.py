@@ -14,11 +14,6 @@ cancelled, though, so a time limit works in two ways:
 Such a runaway keeps one of `slots` (default 16): at most that many reads run
 at once, runaways included, and a read that finds every slot taken is refused
 at once with an error naming the cap, rather than queued behind them.
-
-A read still running after `SLOW` seconds is moved to a lower CPU priority
-(nice `NICE`, Linux schedules threads one by one): it cannot hold up the writer
-through the GIL, but on a machine with few cores it competes with the writer
-for one, and the writes' latency tail followed it. Short reads keep theirs.
 """
 
 from __future__ import annotations
@@ -26,7 +21,6 @@ from __future__ import annotations
 import heapq
 import itertools
 import logging
-import os
 import threading
 import time
 from collections.abc import Callable
@@ -38,8 +32,6 @@ from space.store.queries import Deadline, time_limit_message
 
 log = logging.getLogger("tspace.store")
 
-SLOW = 0.05  # seconds a read runs before it yields the CPU to the writer
-NICE = 10  # its niceness then (the writer's stays 0)
 Job = Callable[[Deadline], bytes | None]
 
 
@@ -51,8 +43,6 @@ class _Read:
         self.lock = threading.Lock()
         self.answered = False
         self.expired = False  # still running when its deadline passed
-        self.thread = 0  # the native id of its thread while it runs (0: not running)
-        self.slow = False  # past `SLOW`: its thread yields the CPU once it runs
 
     def answer(self, payload: bytes | None = None, error: str | None = None) -> bool:
         """Reply once (the reader or the timer, whichever comes first); return whether this did."""
@@ -85,7 +75,6 @@ class Readers:
         self._past_limit = 0
         self._lock = threading.Lock()
         self._timers: list[tuple[float, int, _Read]] = []
-        self._slow: list[tuple[float, int, _Read]] = []  # when each read yields the CPU
         self._wake = threading.Condition(self._lock)
         self._counter = itertools.count()
         self._closed = False
@@ -122,7 +111,6 @@ class Readers:
                 busy = ""
                 self._running += 1
                 heapq.heappush(self._timers, (read.deadline.at, next(self._counter), read))
-                heapq.heappush(self._slow, (time.monotonic() + SLOW, next(self._counter), read))
                 self._wake.notify()
         if busy:
             read.answer(error=busy)
@@ -130,10 +118,6 @@ class Readers:
         threading.Thread(target=self._run, args=(read, job), daemon=True).start()
 
     def _run(self, read: _Read, job: Job) -> None:
-        with self._lock:
-            read.thread = threading.get_native_id()
-            if read.slow:  # it started late (a busy machine): it yields at once
-                _yield_cpu(read.thread)
         try:
             payload = job(read.deadline)
             read.answer(payload)
@@ -144,7 +128,6 @@ class Readers:
             read.answer(error=f"internal error: {type(exc).__name__}: {exc}")
         finally:
             with self._lock:
-                read.thread = 0  # its id may be another thread's once this one ends
                 self._running -= 1
                 if read.expired:
                     self._past_limit -= 1
@@ -160,12 +143,8 @@ class Readers:
                         read.expired = True
                         self._past_limit += 1
                         threading.Thread(target=self._expire, args=(read,), daemon=True).start()
-                while self._slow and self._slow[0][0] <= now:
-                    read = heapq.heappop(self._slow)[2]
-                    read.slow = True
-                    _yield_cpu(read.thread)
-                heads = [heap[0][0] - now for heap in (self._timers, self._slow) if heap]
-                self._wake.wait(min(heads) if heads else None)
+                wait = self._timers[0][0] - now if self._timers else None
+                self._wake.wait(wait)
 
     def _expire(self, read: _Read) -> None:
         if read.answer(error=time_limit_message(read.deadline.limit)):
@@ -174,13 +153,3 @@ class Readers:
                 read.key,
                 read.deadline.limit,
             )
-
-
-def _yield_cpu(thread: int) -> None:
-    """Lower the CPU priority of a running read's thread (no-op where it cannot be done)."""
-    if not thread or not hasattr(os, "setpriority"):
-        return
-    try:
-        os.setpriority(os.PRIO_PROCESS, thread, NICE)
-    except OSError as exc:  # another system's scheduler, or the thread ended: nothing lost
-        log.debug("could not lower a read's priority: %s", exc)
