@@ -30,6 +30,7 @@ import sys
 import tempfile
 import threading
 import time
+from pathlib import Path
 
 import pyoxigraph as ox
 import zenoh
@@ -175,6 +176,7 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--count", type=int, default=1000, help="GETs per Zenoh run")
     parser.add_argument("--million", action="store_true", help="also 1M into a fresh store")
+    parser.add_argument("--plot", type=Path, help="write a PNG of triples per CPU-second here")
     args = parser.parse_args()
     rows: dict[str, list[tuple[float, float]]] = {}
     zenoh_rows: dict[str, list[float]] = {}
@@ -199,10 +201,30 @@ def main() -> None:
         ["way of writing", "triples/s", "triples/CPU-s", "per CPU-s min..max"],
         table,
     )
+    if args.plot is not None:
+        plot({name: median([v[1] for v in values]) for name, values in rows.items()}, args.plot)
     table = [(m, median(v), f"{min(v):.3f}..{max(v):.3f}") for m, v in zenoh_rows.items()]
     print_table(
         f"Zenoh alone, medians of {args.runs} runs", ["measure", "median", "min..max"], table
     )
+
+
+def plot(per_cpu: dict[str, float], path: Path) -> None:
+    """Draw each way's triples per CPU-second against issue 9's 200,000 triples/s."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9, 0.4 * len(per_cpu) + 1.2))
+    ax.barh(list(per_cpu), list(per_cpu.values()), color="tab:blue")
+    ax.axvline(200_000, color="tab:red", linewidth=1, label="target: 200,000 triples/s")
+    ax.set_xlabel("triples per CPU-second of the process (Oxigraph alone, no tspace code)")
+    ax.invert_yaxis()
+    ax.legend(loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(f"plot: {path}")
 
 
 def _range(values: list[float]) -> str:
