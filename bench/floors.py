@@ -219,6 +219,7 @@ def plot(per_cpu: dict[str, float], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(9, 0.4 * len(per_cpu) + 1.2))
     ax.barh(list(per_cpu), list(per_cpu.values()), color="tab:blue")
     ax.axvline(200_000, color="tab:red", linewidth=1, label="target: 200,000 triples/s")
+    ax.xaxis.set_major_formatter(lambda x, _pos: f"{x / 1000:,.0f}k")
     ax.set_xlabel("triples per CPU-second of the process (Oxigraph alone, no tspace code)")
     ax.invert_yaxis()
     ax.legend(loc="lower right")
