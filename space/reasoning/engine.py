@@ -124,7 +124,7 @@ class RuleEngine(EngineReads):
             RuleLoopError: production rules did not settle; the state is loaded without
                 their firings (see `apply`).
         """
-        return self._load_ids([self._encode(t) for t in triples])
+        return self._load_ids(lambda: [self._encode(t) for t in triples])
 
     def load_files(self, paths: Iterable[str | Path]) -> Delta:
         """`load` RDF files (format from the suffix), read by Oxigraph straight into ids.
@@ -133,12 +133,14 @@ class RuleEngine(EngineReads):
             InputError: a file is missing or malformed.
             RuleError, RuleLoopError: as `load`.
         """
-        return self._load_ids(read_ids(paths, self.terms))
+        return self._load_ids(lambda: read_ids(paths, self.terms))
 
-    def _load_ids(self, triples: list[T]) -> Delta:
-        """`load` encoded triples: set-at-a-time when no rule fires one match at a time."""
+    def _load_ids(self, read: Callable[[], list[T]]) -> Delta:
+        """`load` what `read` encodes, read once the engine is known fresh; semi-naively
+        unless a rule fires match by match (`seminaive.eligible`)."""
         if self._loaded:
             raise RuleError("load() starts a new engine; this one is loaded, use apply()")
+        triples = read()
         if not seminaive.eligible(self):
             return self._apply_ids(triples, [])
         delta = seminaive.materialise(self, self._ontology + triples)
