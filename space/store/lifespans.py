@@ -146,15 +146,19 @@ class Leases:
         lifespan: float | None,
         asserted: list[OxTriple],
         removed: list[OxTriple],
+        expires: float | None = None,
     ) -> None:
         """Note what a changeset does to leases: `removed` lose theirs, `asserted` get the write's.
 
         `asserted` are the additions applied (held already or not), `removed`
-        the asserted triples it really removes.
+        the asserted triples it really removes. The lease runs until `expires`
+        (unix seconds), by default `lifespan` from now.
         """
         for t in removed:
             self._release(space, t)
-        group = (space, time.time() + lifespan, request) if lifespan else None
+        if lifespan and expires is None:
+            expires = time.time() + lifespan
+        group = (space, expires, request) if expires is not None else None
         for t in asserted:
             self._release(space, t)
             stale = self.garbage.pop((space, t), None)
@@ -196,6 +200,36 @@ class Leases:
             found.append((group, triples))
             count += len(triples) + CHANGESET
         return found
+
+    def pop_due(self, now: float, budget: int = BUDGET) -> list[tuple[_Group, list[OxTriple]]]:
+        """Return the writes expired by `now` with their triples, leases kept (about `budget`).
+
+        For a cluster replica, where an expiry holds only once the log applied
+        it: until then each is out of the heap; `requeue` puts it back.
+        """
+        found: list[tuple[_Group, list[OxTriple]]] = []
+        count = 0
+        while count < budget and self.next_due() is not None and self._heap[0][0] <= now:
+            group = heapq.heappop(self._heap)[2]
+            if any(group == g for g, _ in found):
+                continue
+            triples = list(self._groups[group])
+            found.append((group, triples))
+            count += len(triples) + CHANGESET
+        return found
+
+    def requeue(self, group: _Group, when: float) -> None:
+        """Sweep a write's leases again at `when` (unix seconds), if it still leases any."""
+        if group in self._groups:
+            heapq.heappush(self._heap, (when, next(self._order), group))
+
+    def live(self, group: _Group) -> bool:
+        """Return whether a write still leases any triple."""
+        return group in self._groups
+
+    def leased(self, space: str, t: OxTriple) -> bool:
+        """Return whether a triple of a space is leased."""
+        return (space, t) in self._held
 
     def collect(self, count: int) -> int:
         """Queue the deletion of up to `count` garbage lease quads with the next commit.
