@@ -203,10 +203,13 @@ class ClusterWriter:
             return
         stamp = lambda: str(self.session.new_timestamp())  # noqa: E731
         flying = lambda key: key in self._writers  # noqa: E731
-        for x in self.expiry.due(self._space, stamp, flying):
-            ask = Request("expire", x.state.name, None)
-            self._stage(ask, x.state, x.net, lambda _n: {}, x.stamp, x.request, 1, taken=False)
-            self.expiry.guard(self._staged[-1].entry, x, self.revision)
+        try:
+            for x in self.expiry.due(self._space, stamp, flying):
+                ask = Request("expire", x.state.name, None)
+                self._stage(ask, x.state, x.net, lambda _n: {}, x.stamp, x.request, 1, taken=False)
+                self.expiry.guard(self._staged[-1].entry, x, self.revision)
+        except Exception:  # a bug must not stop the replica: its writes go on
+            log.exception("replica failed sweeping expired writes")
         self.flush()
 
     # Committing.
