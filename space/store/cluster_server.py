@@ -119,8 +119,8 @@ class ClusterStoreServer(Serving):
             space=self._space,
             publisher=self._publisher,
             max_spaces=self.max_spaces,
-            guard=self.guard,
             expiry=ClusterExpiry(self.etcd_root, db),
+            guard=self.guard,
         )
         self._writer.revision = revision
         for name in db.spaces():
@@ -149,7 +149,7 @@ class ClusterStoreServer(Serving):
     def _run(self) -> None:
         next_beat = time.monotonic()
         writer = self._writer
-        assert writer is not None and writer.expiry is not None
+        assert writer is not None
         while True:
             if time.monotonic() >= next_beat:
                 self._heartbeat()

@@ -68,8 +68,8 @@ class ClusterWriter:
         space: Callable[[str], ClusterSpace],
         publisher: Publisher,
         max_spaces: int,
+        expiry: ClusterExpiry,
         guard: WriteGuard | None = None,
-        expiry: ClusterExpiry | None = None,
     ) -> None:
         self.session, self.db, self.node, self.root = session, db, node, root
         self.expiry = expiry
@@ -96,10 +96,9 @@ class ClusterWriter:
             return
         self._check(req, write, state)
         stamp = write.ts or str(self.session.new_timestamp())
-        plan = self.expiry.plan(state, write) if self.expiry else None
+        plan = self.expiry.plan(state, write)  # before deciding: what it finds held
         net, dropped = decide(state, write, stamp)
-        if plan is not None and self.expiry is not None:
-            net = self.expiry.decided(plan, state, write, net, stamp)
+        net = self.expiry.decided(plan, state, write, net, stamp)
 
         def reply(n: Net | None) -> dict:
             ack: dict = {"id": write.id, "seq": n.entry.seq if n else state.seq}
@@ -111,8 +110,7 @@ class ClusterWriter:
             answer(req, reply(None))
             return
         self._stage(req, state, net, reply, stamp, write.id, attempt, taken=False)
-        if self.expiry is not None:
-            self.expiry.amend(self._staged[-1].entry, state.name, net, write, plan, stamp)
+        self.expiry.amend(self._staged[-1].entry, state.name, net, write, plan, stamp)
 
     def take(self, req: Request, attempt: int = 1) -> None:
         take = intake.query_request(req.payload or b"")
@@ -135,8 +133,7 @@ class ClusterWriter:
             return
         reply = lambda n: {"seq": n.entry.seq, keys.ASSERTED: n.texts[1]}  # noqa: E731
         self._stage(req, state, net, reply, stamp, ident, attempt, taken=True)
-        if self.expiry is not None:
-            self.expiry.amend(self._staged[-1].entry, state.name, net)
+        self.expiry.amend(self._staged[-1].entry, state.name, net)
 
     def _again(self, req: Request, space: str, ident: str, *, take: bool = False) -> bool:
         """Answer a request id already applied (the first outcome), or join one in flight."""
@@ -199,7 +196,7 @@ class ClusterWriter:
 
     def sweep(self) -> None:
         """Decide and send the expiries due (`cluster_expiry`); worker thread, between batches."""
-        if self.expiry is None or self.failed:
+        if self.failed:
             return
         stamp = lambda: str(self.session.new_timestamp())  # noqa: E731
         flying = lambda key: key in self._writers  # noqa: E731
@@ -294,11 +291,7 @@ class ClusterWriter:
 
     def _expiry_again(self, flight: Flight) -> bool:
         """Leave an expiry not committed to the next sweep; return whether it was one."""
-        return (
-            flight.req.kind == "expire"
-            and self.expiry is not None
-            and (self.expiry.retry(flight.request))
-        )
+        return flight.req.kind == "expire" and self.expiry.retry(flight.request)
 
     def ask_barrier(self, item: tuple) -> None:
         """Put `item` back on the worker's queue once this replica applied etcd's revision now.
@@ -362,15 +355,13 @@ class ClusterWriter:
                         continue
                     nets.append((state, net))
                     flight = self._by_payload.get(payload)
-                    if self.expiry is not None:
-                        self.expiry.applied(state.name, payload, net, ours=flight is not None)
+                    self.expiry.applied(state.name, payload, net, ours=flight is not None)
                     if flight is not None:
                         net.entry.dropped = flight.net.entry.dropped
                         ours.append((flight, net))
         last = applied[-1][0]
         try:
-            leases = self.expiry.changes() if self.expiry is not None else ([], [])
-            self.db.commit([n.entry for _, n in nets], leases, revision=last)
+            self.db.commit([n.entry for _, n in nets], self.expiry.changes(), revision=last)
         except CommitFailed as exc:
             self.failed = str(exc)
             log.error("cannot apply revision %d: %s; restart this replica to resume", last, exc)
@@ -407,8 +398,7 @@ class ClusterWriter:
         from space.store.cluster_entries import read_state
 
         revision, pairs, seqs = listing.revision, listing.pairs, listing.seqs  # type: ignore[attr-defined]
-        if self.expiry is not None:
-            self.expiry.forget(self.db)
+        self.expiry.forget(self.db)
         try:
             replace_all(self.db, read_state(self.root, pairs), seqs, revision)
         except CommitFailed as exc:
