@@ -35,7 +35,6 @@ from __future__ import annotations
 import heapq
 import itertools
 import logging
-import sys
 import time
 import uuid
 from collections.abc import Callable
@@ -68,15 +67,16 @@ GARBAGE = 256  # a turn of them when no request comes in
 GARBAGE_BUSY = 16  # while requests come in
 
 _Group = tuple[str, float, str]  # space, expiry (unix seconds), write id
-_Text = tuple[str, str, str]  # a triple as the database writes it (`str` of each term)
+_Text = str  # a triple as the database writes it: `str` of each term, joined by spaces
 
 
 def _text(t: OxTriple) -> _Text:
-    return (str(t[0]), sys.intern(str(t[1])), str(t[2]))
+    return f"{t[0]} {t[1]} {t[2]}"
 
 
 def _triple(k: _Text) -> OxTriple:
-    return (term(k[0]), term(k[1]), term(k[2]))
+    s, p, o = k.split(" ", 2)  # a subject and a predicate are IRIs: no space in them
+    return (term(s), term(p), term(o))
 
 
 @lru_cache(maxsize=4096)
@@ -98,12 +98,11 @@ class Leases:
     """Every lease of every space, and the lease quads the next commit must write."""
 
     def __init__(self) -> None:
-        self._held: dict[tuple[str, _Text], _Group] = {}
+        self._held: dict[str, dict[_Text, _Group]] = {}  # space -> triple -> its write
         self._groups: dict[_Group, set[_Text]] = {}
         self._heap: list[tuple[float, int, _Group]] = []
         self._order = itertools.count()
         self._changes: dict[tuple[_Group, _Text], bool] = {}  # lease quads: insert (True)
-        self._per_space: dict[str, int] = {}  # leased triples
         # Lease quads of triples retracted on expiry, still on disk: deleting them with the
         # retraction would triple its commit, so `collect` deletes them later. A lease quad
         # whose triple is not asserted means nothing (`load` skips it).
@@ -128,11 +127,11 @@ class Leases:
         self._garbage_in[space] -= 1
 
     def __len__(self) -> int:
-        return len(self._held)
+        return sum(map(len, self._held.values()))
 
     def holds(self, space: str) -> bool:
         """Return whether any triple of a space is leased."""
-        return self._per_space.get(space, 0) > 0
+        return bool(self._held.get(space))
 
     def load(self, db: StoreDB) -> None:
         """Forget everything and read the leases from the database (at start, after a failure)."""
@@ -149,8 +148,8 @@ class Leases:
                     self._lease(group, _text(t))
                 else:  # retracted on expiry, its lease quad not collected yet
                     self._discard(group[0], _text(t), group)
-        if self._held:
-            log.info("%d leased triple(s) in %d write(s)", len(self._held), len(self._groups))
+        if self._groups:
+            log.info("%d leased triple(s) in %d write(s)", len(self), len(self._groups))
 
     def decide(
         self,
@@ -211,8 +210,7 @@ class Leases:
             group = heapq.heappop(self._heap)[2]
             triples = list(self._groups.pop(group, ()))
             for t in triples:
-                del self._held[(group[0], t)]
-                self._per_space[group[0]] -= 1
+                del self._held[group[0]][t]
                 self._discard(group[0], t, group)
             found.append((group, [_triple(t) for t in triples]))
             count += len(triples) + CHANGESET
@@ -246,7 +244,7 @@ class Leases:
 
     def leased(self, space: str, t: OxTriple) -> bool:
         """Return whether a triple of a space is leased."""
-        return (space, _text(t)) in self._held
+        return _text(t) in self._held.get(space, ())
 
     def collect(self, count: int) -> int:
         """Queue the deletion of up to `count` garbage lease quads with the next commit.
@@ -262,9 +260,7 @@ class Leases:
         return taken
 
     def _lease(self, group: _Group, t: _Text) -> None:
-        if (group[0], t) not in self._held:
-            self._per_space[group[0]] = self._per_space.get(group[0], 0) + 1
-        self._held[(group[0], t)] = group
+        self._held.setdefault(group[0], {})[t] = group
         held = self._groups.get(group)
         if held is None:
             held = self._groups[group] = set()
@@ -272,10 +268,9 @@ class Leases:
         held.add(t)
 
     def _release(self, space: str, t: _Text) -> None:
-        group = self._held.pop((space, t), None)
+        group = self._held.get(space, {}).pop(t, None)
         if group is None:
             return
-        self._per_space[space] -= 1
         held = self._groups[group]
         held.discard(t)
         if not held:
