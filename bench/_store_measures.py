@@ -3,6 +3,7 @@ a bulk load through `tspace write`, and the store's memory."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import tempfile
@@ -10,7 +11,7 @@ import threading
 import time
 from pathlib import Path
 
-from _harness import code_env, percentile
+from _harness import code_env
 from rdflib import Literal, Namespace
 
 from space import QueryError, SpaceError, TripleSpace
@@ -75,8 +76,8 @@ def sparql_times(endpoint: str, space: str, runs: int) -> dict[str, float]:
 
 def writes_beside_a_slow_query(
     endpoint: str, seconds: float = 5.0
-) -> tuple[float, float, float, float]:
-    """Return (query s, p50, p99, max ms) of 100 acked writes spread over a ~`seconds` query.
+) -> tuple[float, list[float], list[float]]:
+    """Return (query s, write ms beside it, write ms alone) of 100 acked writes each.
 
     The max matters: writes are sequential, so a store that answers the query on
     its writer delays only the first write (by the whole query), which p99 of 100
@@ -84,7 +85,9 @@ def writes_beside_a_slow_query(
 
     The query counts a four-way cross join, its size calibrated on this store
     first; the writes (another client, another space) start once it runs and are
-    spread over its expected duration.
+    spread over its expected duration. The same 100 writes, spaced the same, are
+    timed first with no query running: the machine's own tail, to tell from what
+    the query adds.
     """
     text = "SELECT (COUNT(*) AS ?n) WHERE { ?a ?p ?b . ?c ?q ?d . ?e ?r ?f . ?g ?s ?h }"
     with TripleSpace.open(endpoint, space="slowq") as ts:
@@ -99,16 +102,23 @@ def writes_beside_a_slow_query(
         holder: list[float] = []
         query = threading.Thread(target=lambda: holder.append(_timed(ts, text)))
         with TripleSpace.open(endpoint, space="beside") as writer:
+            alone = _paced_writes(writer, took * 0.8 / 100)
             query.start()
             time.sleep(0.3)  # the query must be running at the store before the writes start
-            delays = []
-            for i in range(100):
-                begun = time.perf_counter()
-                writer.write([(EX.w, EX.n, Literal(i))], timeout=300)
-                delays.append((time.perf_counter() - begun) * 1000)
-                time.sleep(max(0.0, took * 0.8 / 100 - (time.perf_counter() - begun)))
+            beside = _paced_writes(writer, took * 0.8 / 100)
             query.join()
-    return holder[0], percentile(delays, 50), percentile(delays, 99), max(delays)
+    return holder[0], beside, alone
+
+
+def _paced_writes(writer: TripleSpace, spacing: float) -> list[float]:
+    """Return the ms each of 100 acked one-triple writes took, one every `spacing` s."""
+    delays = []
+    for i in range(100):
+        begun = time.perf_counter()
+        writer.write([(EX.w, EX.n, Literal(i))], timeout=300)
+        delays.append((time.perf_counter() - begun) * 1000)
+        time.sleep(max(0.0, spacing - (time.perf_counter() - begun)))
+    return delays
 
 
 def _timed(ts: TripleSpace, text: str) -> float:
@@ -147,3 +157,9 @@ def rss_mb(pid: int) -> float:
         if line.startswith("VmRSS:"):
             return int(line.split()[1]) / 1024
     return 0.0
+
+
+def cpu_seconds(pid: int) -> float:
+    """Return the CPU time (user + system, every thread) a process has used so far."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")

@@ -20,6 +20,7 @@ With `--store`, the same figures through three `tspace serve --cluster`
 replicas and Zenoh clients (`_cluster_store.py`): what a robot sees.
 
     .venv/bin/python bench/cluster_bench.py [--runs 3] [--seconds 5] [--inflight 64] [--store]
+        [--old TREE]   # with --store: the replicas of the code in TREE too, in the same run
 """
 
 from __future__ import annotations
@@ -162,7 +163,12 @@ async def failover_run(cluster: LocalCluster, inflight: int) -> float:
         await client.close()
 
 
-def plot(latencies: list[float], failovers: list[float], name: str = "cluster") -> Path:
+def plot(
+    latencies: list[float],
+    failovers: list[float],
+    name: str = "cluster",
+    before: list[float] | None = None,
+) -> Path:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -170,8 +176,14 @@ def plot(latencies: list[float], failovers: list[float], name: str = "cluster") 
 
     OUT.mkdir(parents=True, exist_ok=True)
     figure, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
-    values = sorted(latencies)
-    left.step(values, [(i + 1) / len(values) for i in range(len(values))], where="post")
+    curves = [("before", before), ("now", latencies)] if before else [("", latencies)]
+    for label, curve in curves:
+        values = sorted(curve)  # type: ignore[arg-type]
+        ys = [(i + 1) / len(values) for i in range(len(values))]
+        left.step(values, ys, where="post", label=label or None)
+    if before:
+        left.set_xscale("log")
+        left.legend()
     left.axvline(20, linestyle="--", color="grey")
     left.annotate("target p99 20 ms", (20, 0.1), rotation=90)
     left.set_xlabel("append -> ack (ms)" if name == "cluster" else "send -> ack (ms)")
@@ -228,38 +240,47 @@ def main(runs: int, seconds: float, inflight: int) -> None:
     print(f"plot: {plot(latencies, failovers)}")
 
 
-def main_store(runs: int, seconds: float, inflight: int) -> None:
+def main_store(runs: int, seconds: float, inflight: int, old: Path | None) -> None:
+    """Through the store; with `old` (a source tree), its replicas too, in the same run."""
     from _cluster_store import embedded_once, run_once
 
-    rows, latencies, failovers = [], [], []
+    rows, latencies, failovers, before = [], [], [], []
     for run in range(runs):
         one = embedded_once(seconds, inflight)
+        row: list = [run + 1, one["rate"], one["p99"]]
+        if old is not None:
+            with tempfile.TemporaryDirectory(prefix="tspace-cluster-store-") as tmp:
+                o = run_once(Path(tmp), seconds, inflight, old, kill=False)
+            before += o.pop("latencies")  # type: ignore[arg-type]
+            row += [o["rate"], o["p50"], o["p99"], o["cpu replicas"], o["cpu etcd"]]
         with tempfile.TemporaryDirectory(prefix="tspace-cluster-store-") as tmp:
             r = run_once(Path(tmp), seconds, inflight)
         latencies += r.pop("latencies")  # type: ignore[arg-type]
         failovers.append(r["failover"])
-        cluster = [r["rate"], r["p50"], r["p99"], r["failed"], r["failover"]]
-        rows.append([run + 1, one["rate"], one["p99"], *cluster, os.getloadavg()[0]])
+        row += [r["rate"], r["p50"], r["p99"], r["cpu replicas"], r["cpu etcd"]]
+        row += [r["failed"], r["failover"]]
+        if old is not None:
+            row.append(r["rate"] / o["rate"])
+        rows.append([*row, os.getloadavg()[0]])
         print(rows[-1], flush=True)
-    rows.append(["median", *(median([r[i] for r in rows]) for i in range(1, 9))])
+    rows.append(["median", *(median([r[i] for r in rows]) for i in range(1, len(rows[0])))])
+    header = ["run", "embedded cs/s", "p99 ms"]
+    if old is not None:
+        header += ["before cs/s", "p50 ms", "p99 ms", "cpu ms/cs: replicas", "etcd"]
+    header += ["cluster cs/s", "p50 ms", "p99 ms", "cpu ms/cs: replicas", "etcd"]
+    header += ["refused", "failover s"]
+    if old is not None:
+        header.append("x before")
     print_table(
         f"through the store, {inflight} in flight, {seconds:g} s per run: one embedded store, "
-        "then 3 etcd members and 3 replicas on this host "
-        "(targets: >= 5000/s, p99 <= 20 ms, failover <= 3 s)",
-        [
-            "run",
-            "embedded cs/s",
-            "p99 ms",
-            "cluster cs/s",
-            "p50 ms",
-            "p99 ms",
-            "refused",
-            "failover s",
-            "load",
-        ],
+        + ("then 3 etcd members and 3 replicas of the code before, " if old else "then ")
+        + "3 etcd members and 3 replicas on this host "
+        "(targets: >= 5000/s, p99 <= 20 ms, failover <= 3 s); cpu: CPU time of the 3 replicas, "
+        "of the 3 etcd members, per acknowledged changeset",
+        [*header, "load"],
         rows,
     )
-    print(f"plot: {plot(latencies, failovers, 'cluster-store')}")
+    print(f"plot: {plot(latencies, failovers, 'cluster-store', before or None)}")
 
 
 if __name__ == "__main__":
@@ -268,5 +289,9 @@ if __name__ == "__main__":
     parser.add_argument("--seconds", type=float, default=5.0)
     parser.add_argument("--inflight", type=int, default=64)
     parser.add_argument("--store", action="store_true", help="through store replicas and Zenoh")
+    parser.add_argument("--old", type=Path, help="with --store: replicas of this source tree too")
     args = parser.parse_args()
-    (main_store if args.store else main)(args.runs, args.seconds, args.inflight)
+    if args.store:
+        main_store(args.runs, args.seconds, args.inflight, args.old)
+    else:
+        main(args.runs, args.seconds, args.inflight)

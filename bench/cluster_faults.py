@@ -32,7 +32,8 @@ from _harness import print_table
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import logfleet
 import storefleet
-from logfleet import NAMES, LogFleet
+from etcdhosts import NAMES
+from logfleet import LogFleet
 from netns import Network, netns_unavailable
 from storefleet import StoreFleet
 
@@ -65,12 +66,7 @@ def kills(fleet: Fleet, rounds: int) -> None:
         fleet.wait_acked(next(h for h in NAMES if h != leader), 10, after=time.time())
         fleet.start_etcd(leader)
         victim = random.choice(NAMES)
-        if isinstance(fleet, StoreFleet):
-            fleet.kill_replica(victim)
-            fleet.start_replica(victim)
-        else:
-            fleet.kill_node(victim)
-            fleet.start_node(victim)
+        fleet.restart_worker(victim)
         fleet.wait_acked(victim, 20, after=time.time())
 
 

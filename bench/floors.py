@@ -1,11 +1,19 @@
-"""Measure the floors under the store's figures: Oxigraph's own write rate, Zenoh's own hop.
+"""Measure the floors under the store's figures: what Oxigraph and Zenoh do on their own.
 
-Run: python bench/floors.py [--runs 3]
+Run: python bench/floors.py [--runs 3] [--million]
 
-1. Oxigraph: N-Quads `Store.load` into one named graph of an on-disk store
-   (what the store's commit does for plain changesets), 16 changesets of 100
-   triples at a time and 10,000 at a time, into a store already holding
-   100,000: triples/s with no Python work per triple at all.
+1. Oxigraph's write methods, with no tspace code at all: N-Quads `Store.load`
+   into one named graph (what the store's commit does for plain changesets),
+   against the default graph, an in-memory store, `Store.extend` of quads made
+   beforehand, and the non-transactional `bulk_load` (SST files ingested), at
+   100, 1,600 (16 changesets of 100: the store's group commit at 16 in flight)
+   and 10,000 triples a call, into a store already holding 100,000. Each row
+   gives triples/s of wall time and triples per CPU-second of the process (all
+   its threads, RocksDB's own included): on a machine shared with other work the
+   second is the steadier one, and 2 cores cannot go faster than twice it.
+   `--million` adds 1M triples into a fresh store, 10,000 a commit with the
+   store's background flush every 50,000 triples (what `tspace write` of 1M
+   costs Oxigraph), and the same in one `bulk_load`.
 2. Zenoh: a writer's GET to a queryable in a router process that hands it to
    a thread (as the store's callbacks do), which replies and puts a sample that
    a subscriber process receives: p50/p99 from the GET to the subscriber's
@@ -22,6 +30,7 @@ import sys
 import tempfile
 import threading
 import time
+from pathlib import Path
 
 import pyoxigraph as ox
 import zenoh
@@ -30,24 +39,61 @@ from _harness import free_port, median, percentile, print_table
 GRAPH = "urn:tspace:graph:floor:asserted"
 
 
-def oxigraph(batch: int, total: int) -> float:
-    """Return triples/s of loading `total` new triples, `batch` per Store.load, on disk."""
-    with tempfile.TemporaryDirectory() as d:
-        store = ox.Store(d)
-        store.load(_doc(0, 100_000), format=ox.RdfFormat.N_QUADS)
-        docs = [_doc(100_000 + i, batch) for i in range(0, total, batch)]
-        start = time.perf_counter()
+WAYS = {  # name -> (method, graph: named or default, on disk, triples a call)
+    "load, named graph, 100 a commit": ("load", True, True, 100),
+    "load, named graph, 1,600 a commit": ("load", True, True, 1600),
+    "load, named graph, 10,000 a commit": ("load", True, True, 10_000),
+    "load, named graph, 1,600 a commit, in memory": ("load", True, False, 1600),
+    "load, default graph, 1,600 a commit": ("load", False, True, 1600),
+    "extend (quads made before), named graph, 1,600": ("extend", True, True, 1600),
+    "bulk_load (not atomic), named graph, 1,600 a call": ("bulk_load", True, True, 1600),
+    "bulk_load (not atomic), named graph, 10,000 a call": ("bulk_load", True, True, 10_000),
+}
+
+
+def oxigraph(method: str, named: bool, disk: bool, batch: int, total: int) -> tuple[float, float]:
+    """Return (triples/s of wall time, triples per CPU-second) of writing `total` new triples,
+    `batch` per call, into a store already holding 100,000."""
+    with tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as d:
+        store = ox.Store(d) if disk else ox.Store()
+        store.load(_doc(0, 100_000, named), format=ox.RdfFormat.N_QUADS)
+        fmt = ox.RdfFormat.N_QUADS if named else ox.RdfFormat.N_TRIPLES
+        docs: list = [_doc(100_000 + i, batch, named) for i in range(0, total, batch)]
+        if method == "extend":
+            docs = [list(ox.parse(doc, format=fmt)) for doc in docs]
+        write = getattr(store, method)
+        wall, cpu = time.perf_counter(), time.process_time()
         for doc in docs:
-            store.load(doc, format=ox.RdfFormat.N_QUADS)
-        took = time.perf_counter() - start
+            write(doc) if method == "extend" else write(doc, format=fmt)
+        wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+        del write, store  # closes the database before its directory goes
+    return total / wall, total / cpu
+
+
+def million(bulk: bool) -> tuple[float, float]:
+    """Return (triples/s, triples per CPU-second) of 1M triples into a fresh on-disk store:
+    10,000 a commit with a flush every 50,000 (as the store does), or one `bulk_load`."""
+    with tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as d:
+        store = ox.Store(d)
+        docs = [_doc(0, 1_000_000)] if bulk else [_doc(i, 10_000) for i in range(0, 10**6, 10**4)]
+        wall, cpu = time.perf_counter(), time.process_time()
+        for n, doc in enumerate(docs):
+            if bulk:
+                store.bulk_load(doc, format=ox.RdfFormat.N_QUADS)
+            else:
+                store.load(doc, format=ox.RdfFormat.N_QUADS)
+                if n % 5 == 4:
+                    store.flush()
+        wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
         del store
-    return total / took
+    return 10**6 / wall, 10**6 / cpu
 
 
-def _doc(first: int, count: int) -> str:
+def _doc(first: int, count: int, named: bool = True) -> str:
     xsd = "http://www.w3.org/2001/XMLSchema#integer"
+    end = f" <{GRAPH}> .\n" if named else " .\n"
     return "".join(
-        f'<urn:floor:s{i // 100}> <urn:floor:p{i % 5}> "{i}"^^<{xsd}> <{GRAPH}> .\n'
+        f'<urn:floor:s{i // 100}> <urn:floor:p{i % 5}> "{i}"^^<{xsd}>{end}'
         for i in range(first, first + count)
     )
 
@@ -129,20 +175,61 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--count", type=int, default=1000, help="GETs per Zenoh run")
+    parser.add_argument("--million", action="store_true", help="also 1M into a fresh store")
+    parser.add_argument("--plot", type=Path, help="write a PNG of triples per CPU-second here")
     args = parser.parse_args()
-    rows: dict[str, list[float]] = {}
+    rows: dict[str, list[tuple[float, float]]] = {}
+    zenoh_rows: dict[str, list[float]] = {}
     for _ in range(args.runs):
-        rows.setdefault("Oxigraph load, 16 x 100 triples a commit (triples/s)", []).append(
-            oxigraph(1600, 32_000)
-        )
-        rows.setdefault("Oxigraph load, 10,000 triples a commit (triples/s)", []).append(
-            oxigraph(10_000, 100_000)
-        )
+        for name, (method, named, disk, batch) in WAYS.items():
+            total = 32_000 if batch < 10_000 else 100_000
+            rows.setdefault(name, []).append(oxigraph(method, named, disk, batch, total))
+        if args.million:
+            rows.setdefault("1M into a fresh store, 10,000 a commit, flush", []).append(
+                million(bulk=False)
+            )
+            rows.setdefault("1M into a fresh store, one bulk_load", []).append(million(bulk=True))
         p50, p99 = zenoh_hop(args.count)
-        rows.setdefault("Zenoh GET -> thread -> put -> subscriber p50 (ms)", []).append(p50)
-        rows.setdefault("Zenoh GET -> thread -> put -> subscriber p99 (ms)", []).append(p99)
-    table = [(m, median(v), f"{min(v):.3f}..{max(v):.3f}") for m, v in rows.items()]
-    print_table(f"floors, medians of {args.runs} runs", ["measure", "median", "min..max"], table)
+        zenoh_rows.setdefault("Zenoh GET -> thread -> put -> subscriber p50 (ms)", []).append(p50)
+        zenoh_rows.setdefault("Zenoh GET -> thread -> put -> subscriber p99 (ms)", []).append(p99)
+    table = []
+    for name, values in rows.items():
+        wall, cpu = [v[0] for v in values], [v[1] for v in values]
+        table.append((name, f"{median(wall):,.0f}", f"{median(cpu):,.0f}", _range(cpu)))
+    print_table(
+        f"Oxigraph alone (pyoxigraph {ox.__version__}), medians of {args.runs} runs",
+        ["way of writing", "triples/s", "triples/CPU-s", "per CPU-s min..max"],
+        table,
+    )
+    if args.plot is not None:
+        plot({name: median([v[1] for v in values]) for name, values in rows.items()}, args.plot)
+    table = [(m, median(v), f"{min(v):.3f}..{max(v):.3f}") for m, v in zenoh_rows.items()]
+    print_table(
+        f"Zenoh alone, medians of {args.runs} runs", ["measure", "median", "min..max"], table
+    )
+
+
+def plot(per_cpu: dict[str, float], path: Path) -> None:
+    """Draw each way's triples per CPU-second against issue 9's 200,000 triples/s."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9, 0.4 * len(per_cpu) + 1.2))
+    ax.barh(list(per_cpu), list(per_cpu.values()), color="tab:blue")
+    ax.axvline(200_000, color="tab:red", linewidth=1, label="target: 200,000 triples/s")
+    ax.xaxis.set_major_formatter(lambda x, _pos: f"{x / 1000:,.0f}k")
+    ax.set_xlabel("triples per CPU-second of the process (Oxigraph alone, no tspace code)")
+    ax.invert_yaxis()
+    ax.legend(loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(f"plot: {path}")
+
+
+def _range(values: list[float]) -> str:
+    return f"{min(values):,.0f}..{max(values):,.0f}"
 
 
 if __name__ == "__main__":

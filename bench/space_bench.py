@@ -2,8 +2,10 @@
 
 Run: python bench/space_bench.py [--runs 5] [--store] [--old DIR --plot docs/store-bench.png]
 With --old (a worktree of the code before: `git worktree add /tmp/old a5d5dd9`) every run
-measures the server from that tree and from this one, interleaved; the clients are this tree's
-(the wire format is compatible both ways), so the difference is the store's.
+measures the server from that tree and from this one, interleaved; the latency's writer and
+subscriber run from the same tree as the server (the client's path is part of that figure),
+the other clients are this tree's (the wire format is compatible both ways), so the rest of
+the difference is the store's. `--latency-only`: only the write -> notification latency.
 Every figure is a median over runs; the store, the subscriber and the writer
 are separate processes talking through the router on loopback.
 """
@@ -18,7 +20,7 @@ from collections import deque
 from pathlib import Path
 
 import _store_measures as store
-from _harness import median, percentile, print_table, serve_process
+from _harness import code_env, median, percentile, print_table, serve_process
 from rdflib import Literal, Namespace, URIRef
 
 from space import Pending, TripleSpace
@@ -34,24 +36,22 @@ THROUGHPUT = {
 }
 
 
-def latency(endpoint: str, space: str, count: int, nowait: bool) -> tuple[float, float]:
-    """Return p50, p99 (ms) from a write starting to the subscriber process receiving it."""
+def latency(
+    endpoint: str, space: str, count: int, nowait: bool, code: Path | None = None
+) -> tuple[float, float]:
+    """Return p50, p99 (ms) from a write starting to the subscriber process receiving it.
+
+    The writer and the subscriber are processes running from `code` (default this tree).
+    """
+    child = [sys.executable, str(BENCH / "_latency_subscriber.py")]
+    env = code_env(code)
     sub = subprocess.Popen(
-        [sys.executable, str(BENCH / "_latency_subscriber.py"), endpoint, space],
-        stdout=subprocess.PIPE,
-        text=True,
+        [*child, "subscribe", endpoint, space], stdout=subprocess.PIPE, text=True, env=env
     )
     assert sub.stdout is not None
     assert sub.stdout.readline().strip() == "ready"
-    with TripleSpace.open(endpoint, space=space, agent="bench") as ts:
-        for i in range(count):
-            triple = (EX[f"s{i % 10}"], T, Literal(time.monotonic_ns()))
-            if nowait:
-                ts.write_nowait([triple])
-                time.sleep(0.002)  # one changeset at a time, as a sensor would
-            else:
-                ts.write([triple])
-        ts.write([(EX.end, T, Literal(-1))])
+    mode = ["nowait"] if nowait else []
+    subprocess.run([*child, "write", endpoint, space, str(count), *mode], check=True, env=env)
     delays = [int(x) / 1e6 for x in sub.stdout.readline().split()]
     sub.wait(timeout=10)
     return percentile(delays, 50), percentile(delays, 99)
@@ -122,17 +122,26 @@ def measure(endpoint: str, pid: int, code: Path | None, run: int, args) -> dict[
     rows: dict[str, float] = {}
     if args.million:
         if code is None:  # the old `tspace write` sends one changeset, refused above 100,000
+            used = store.cpu_seconds(pid)
             rows["tspace write of 1,000,000 triples, fresh store (triples/s)"] = store.bulk_write(
                 endpoint, code, 1_000_000
             )
+            rows["store CPU for them (us/triple)"] = store.cpu_seconds(pid) - used
             rows["store RSS holding those 1,000,000 triples (MB)"] = store.rss_mb(pid)
         return rows
-    p50, p99 = latency(endpoint, f"lat{run}", args.count, nowait=False)
+    p50, p99 = latency(endpoint, f"lat{run}", args.count, nowait=False, code=code)
     rows["latency write()->notify p50 (ms)"] = p50
     rows["latency write()->notify p99 (ms)"] = p99
+    if args.latency_only:
+        return rows
     for mode in ("acked", "pipelined"):
+        used = store.cpu_seconds(pid)
         rows[f"throughput, {THROUGHPUT[mode]} of 100 (triples/s)"] = throughput(
             endpoint, f"thr{mode}{run}", 200, 100, mode
+        )
+        # the store's CPU for those 20,000 triples: steadier than wall time on a shared machine
+        rows[f"store CPU, {THROUGHPUT[mode]} of 100 (us/triple)"] = (
+            (store.cpu_seconds(pid) - used) / 20_000 * 1e6
         )
     cli, lib = query_10k(endpoint, f"q{run}")
     rows["tspace query, 10,000 triples, whole CLI (s)"] = cli
@@ -146,11 +155,12 @@ def measure(endpoint: str, pid: int, code: Path | None, run: int, args) -> dict[
         )
         for name, seconds in store.sparql_times(endpoint, space, 3).items():
             rows[f"SPARQL on 100k: {name} (ms)"] = seconds * 1000
-        took, w50, w99, wmax = store.writes_beside_a_slow_query(endpoint)
+        took, beside, alone = store.writes_beside_a_slow_query(endpoint)
         rows["a slow query's duration (s)"] = took
-        rows["100 acked writes beside it, p50 (ms)"] = w50
-        rows["100 acked writes beside it, p99 (ms)"] = w99
-        rows["100 acked writes beside it, max (ms)"] = wmax
+        for label, delays in (("beside it", beside), ("alone, just before it", alone)):
+            rows[f"100 acked writes {label}, p50 (ms)"] = percentile(delays, 50)
+            rows[f"100 acked writes {label}, p99 (ms)"] = percentile(delays, 99)
+            rows[f"100 acked writes {label}, max (ms)"] = max(delays)
         name = f"tspace write of {args.bulk:,} triples (triples/s)"
         if code is not None and args.bulk > 100_000:
             # the old `tspace write` sends one changeset, which its store refuses above 100,000
@@ -185,6 +195,9 @@ def main() -> None:
         "(the new tree only)",
     )
     parser.add_argument("--plot", type=Path, help="write a PNG of new vs old here")
+    parser.add_argument(
+        "--latency-only", action="store_true", help="only the write -> notification latency"
+    )
     args = parser.parse_args()
     codes: dict[str, Path | None] = {"new": None}
     if args.old is not None:

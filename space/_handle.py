@@ -12,7 +12,7 @@ import zenoh
 from rdflib import Graph
 
 from space import keys
-from space._request import ask_store
+from space._request import Queriers, ask_store
 from space._subscription import Dispatcher, Subscription
 from space.changeset import pack
 from space.errors import TemplateError
@@ -53,6 +53,7 @@ class Handle:
         self.agent = agent or f"client-{session.zid()}"
         self.prefixes = PrefixMap(prefixes)
         self._owns_session = _owns_session
+        self._queriers = Queriers(session)  # the store's services, asked on declared queriers
         self._dispatcher = Dispatcher(self._fetch_log)
         self._subscriptions: set[Subscription] = set()
         self._watchdogs: list = []
@@ -68,7 +69,7 @@ class Handle:
         request["limit"] = max(0.05, timeout - max(0.1, min(1.0, timeout * 0.1)))
         if self.stale if stale is None else stale:
             request["stale"] = True  # see docs/wire-format.md
-        return ask_store(self.session, self._key("query"), pack(request), timeout, what="query")
+        return ask_store(self._queriers, self._key("query"), pack(request), timeout, what="query")
 
     def _template(self, template: TemplateLike) -> Template:
         try:
@@ -100,13 +101,17 @@ class Handle:
 
     def _seq(self, timeout: float) -> int:
         reply = ask_store(
-            self.session, self._key("log"), pack({"from": 1, "to": 0}), timeout, what="log request"
+            self._queriers,
+            self._key("log"),
+            pack({"from": 1, "to": 0}),
+            timeout,
+            what="log request",
         )
         return int(reply.get("seq") or 0)
 
     def _fetch_log(self, first: int, last: int) -> tuple[list[bytes], int]:
         reply = ask_store(
-            self.session,
+            self._queriers,
             self._key("log"),
             pack({"from": first, "to": last}),
             5.0,

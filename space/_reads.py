@@ -141,7 +141,7 @@ class Reads(Handle):
         if last:
             request["to"] = last
         key = self._key("log")
-        reply = ask_store(self.session, key, pack(request), timeout, what="log request")
+        reply = ask_store(self._queriers, key, pack(request), timeout, what="log request")
         changes = [Changeset.decode(bytes(p), published=True) for p in reply.get("changes") or ()]
         return changes, int(reply.get("seq") or 0)
 
@@ -163,7 +163,7 @@ class Reads(Handle):
         t = self._template(template)
         request = {"template": t.to_wire(), "limit": int(limit)}
         try:
-            reply = ask_store(self.session, self._key("why"), pack(request), timeout, what="why")
+            reply = ask_store(self._queriers, self._key("why"), pack(request), timeout, what="why")
         except (SpaceUnavailable, SpaceTimeout) as exc:
             raise NoReasoner(
                 f"no reasoner answered on space {self.space!r} within {timeout:g} s "

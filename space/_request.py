@@ -1,8 +1,9 @@
-"""Request/reply with the store over `Session.get`."""
+"""Request/reply with the store: over declared Zenoh queriers, or `Session.get`."""
 
 from __future__ import annotations
 
 import re
+import threading
 import time
 
 import zenoh
@@ -18,8 +19,68 @@ from space.errors import (
 )
 
 
+class Queriers:
+    """A handle's declared queriers, one per (key, timeout) it asks the store on, and
+    its declared publishers (fire-and-forget writes).
+
+    Zenoh means repeated queries on one key to go through a `Querier` declared
+    once (the key resolved and routed once, not per request), and repeated puts
+    through a `Publisher`. The timeout is a querier's own, so a request whose
+    timeout has no querier yet declares one, up to `LIMIT`; past that (a caller
+    inventing timeouts) it is a plain GET.
+    """
+
+    LIMIT = 16
+
+    def __init__(self, session: zenoh.Session) -> None:
+        self.session = session
+        self._declared: dict[tuple[str, float], zenoh.Querier] = {}
+        self._publishers: dict[str, zenoh.Publisher] = {}
+        self._lock = threading.Lock()
+        self._closed = False
+
+    def put(self, key: str, payload: bytes) -> None:
+        """Publish one fire-and-forget request on `key` (blocking while congested)."""
+        with self._lock:
+            publisher = self._publishers.get(key)
+            if publisher is None and len(self._publishers) < self.LIMIT and not self._closed:
+                publisher = self._publishers[key] = self.session.declare_publisher(
+                    key, congestion_control=zenoh.CongestionControl.BLOCK
+                )
+        if publisher is None:
+            self.session.put(key, payload, congestion_control=zenoh.CongestionControl.BLOCK)
+        else:
+            publisher.put(payload)
+
+    def get(self, key: str, payload: bytes, timeout: float) -> zenoh.Handler:
+        """Send one request; return the handler its replies come in on."""
+        with self._lock:
+            querier = self._declared.get((key, timeout))
+            if querier is None and len(self._declared) < self.LIMIT and not self._closed:
+                querier = self._declared[(key, timeout)] = self.session.declare_querier(
+                    key,
+                    timeout=timeout,
+                    consolidation=zenoh.ConsolidationMode.NONE,
+                    congestion_control=zenoh.CongestionControl.BLOCK,
+                )
+        if querier is None:
+            return _get(self.session, key, payload, timeout)
+        return querier.get(payload=payload)
+
+    def close(self) -> None:
+        """Undeclare everything (before the session closes); later requests are plain ones."""
+        with self._lock:
+            declared = [*self._declared.values(), *self._publishers.values()]
+            self._declared, self._publishers, self._closed = {}, {}, True
+        for entity in declared:
+            entity.undeclare()
+
+
+Asker = zenoh.Session | Queriers  # what a request goes out through
+
+
 def ask_store(
-    session: zenoh.Session, key: str, payload: bytes, timeout: float, *, what: str = "request"
+    session: Asker, key: str, payload: bytes, timeout: float, *, what: str = "request"
 ) -> dict:
     """Send one request to the store's queryable and return its decoded reply.
 
@@ -36,11 +97,10 @@ def ask_store(
         ChangesetRejected: the store refused a write (`what="write"`).
     """
     deadline = time.monotonic() + timeout
-    while True:
-        replies = list(_get(session, key, payload, deadline - time.monotonic()))
-        if replies or deadline - time.monotonic() < 0.05:
-            break
+    replies = list(_send(session, key, payload, timeout))
+    while not replies and deadline - time.monotonic() >= 0.05:
         time.sleep(0.05)  # nobody answered at once: no queryable reachable yet
+        replies = list(_get(_plain(session), key, payload, deadline - time.monotonic()))
     return _decode(replies, key, timeout, what)
 
 
@@ -55,12 +115,12 @@ class Pending:
     """
 
     def __init__(
-        self, session: zenoh.Session, key: str, payload: bytes, timeout: float, *, what: str
+        self, session: Asker, key: str, payload: bytes, timeout: float, *, what: str
     ) -> None:
         self._session, self._key, self._payload, self._what = session, key, payload, what
         self._timeout = timeout
         self._deadline = time.monotonic() + timeout
-        self._replies = _get(session, key, payload, timeout)
+        self._replies = _send(session, key, payload, timeout)
 
     def result(self) -> dict:
         """Wait for the reply and return it decoded.
@@ -71,8 +131,20 @@ class Pending:
         replies = list(self._replies)
         left = self._deadline - time.monotonic()
         if not replies and left >= 0.05:
-            return ask_store(self._session, self._key, self._payload, left, what=self._what)
+            plain = _plain(self._session)  # a timeout of its own: no querier declared for it
+            return ask_store(plain, self._key, self._payload, left, what=self._what)
         return _decode(replies, self._key, self._timeout, self._what)
+
+
+def _plain(asker: Asker) -> zenoh.Session:
+    return asker.session if isinstance(asker, Queriers) else asker
+
+
+def _send(asker: Asker, key: str, payload: bytes, timeout: float) -> zenoh.Handler:
+    """Send a request the caller's way: on a declared querier if it has them."""
+    if isinstance(asker, Queriers):
+        return asker.get(key, payload, timeout)
+    return _get(asker, key, payload, timeout)
 
 
 def _get(session: zenoh.Session, key: str, payload: bytes, timeout: float) -> zenoh.Handler:

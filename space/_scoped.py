@@ -3,7 +3,8 @@
 It declares one Zenoh subscriber per selector on `@/changes/<s>/<p>` (see
 `space._parts`) and delivers the parts it receives as `Change`s: the parts of
 one changeset that arrive together (the store publishes them in one burst) as
-one, a part that comes late as another with the same id and seq. Per key, it
+one, a part that comes late as another with the same id and seq; after a part of
+a changeset of many (`n`), the dispatcher waits a little for the rest. Per key, it
 remembers the seq of the last part delivered; the store's `prev` says which
 seq it should be. When `prev` names one it never saw
 (past `last_seq`, up to which it holds everything selected), it fetches the
@@ -23,7 +24,7 @@ from rdflib import BNode, Literal, URIRef
 
 from space import keys
 from space._parts import Part, split, term_chunk
-from space._subscription import LATEST, Callback, Change, Dispatcher, Fetch, Subscription
+from space._subscription import BURST, LATEST, Callback, Change, Dispatcher, Fetch, Subscription
 from space.changeset import Changeset, published_seq, unpack
 from space.errors import InputError, MalformedPayload, SpaceError
 from space.prefixes import PrefixMap
@@ -98,6 +99,8 @@ class ScopedSubscription(Subscription):
         prev = wire.get("prev")
         if not isinstance(prev, int) or isinstance(prev, bool) or not 0 <= prev < seq:
             raise MalformedPayload(f"a published part has a 'prev' below its seq, got {prev!r}")
+        count = wire.get("n")  # optional: how many parts its changeset was cut into
+        self.bursting = isinstance(count, int) and count >= BURST
         known = max(self.last_seq, self._last.get(key, 0))
         if seq <= known:
             return []

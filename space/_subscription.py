@@ -11,6 +11,7 @@ from __future__ import annotations
 import logging
 import queue
 import threading
+import time
 from collections.abc import Callable
 from contextlib import ExitStack
 from dataclasses import dataclass, field
@@ -43,6 +44,7 @@ class Subscription:
     """
 
     merges = False  # whether changes with one seq may arrive apart (parts), to merge
+    bursting = False  # whether the last item received was a part of a changeset of many
 
     def __init__(
         self,
@@ -175,6 +177,13 @@ class Subscription:
 Fetch = Callable[[int, int], tuple[list[bytes], int]]
 LATEST = 2**62  # "up to the store's current sequence number" in a log request
 _BATCH = 1000  # queued items handled before their changes are delivered
+# A changeset cut into many parts arrives over a few ms, a part at a time: a subscriber
+# that delivered each handful as it came would make its agent act (tick) a dozen times
+# on one change. After a part of a changeset of BURST parts or more (its `n`), delivery
+# waits up to HOLD for the next item, HOLD_MAX in all.
+BURST = 8
+HOLD = 0.0005
+HOLD_MAX = 0.005
 
 
 @dataclass(frozen=True)
@@ -249,9 +258,16 @@ class Dispatcher:
 
     def _run(self) -> None:
         out: list[tuple[Subscription, Change]] = []
+        held = 0.0  # when delivery started waiting for more parts
         while True:
-            batch = [self._queue.get()]
-            while len(batch) < _BATCH:  # what is queued already is handled, then delivered
+            try:
+                first = self._queue.get(timeout=HOLD if held else None)
+            except queue.Empty:
+                first = False  # no more parts came: deliver
+            batch = [first] if first is not False else []
+            while (
+                batch and len(batch) < _BATCH
+            ):  # what is queued already is handled, then delivered
                 try:
                     batch.append(self._queue.get_nowait())
                 except queue.Empty:
@@ -261,7 +277,12 @@ class Dispatcher:
                     self._deliver(out)
                     return
                 self._step(*item, out)
+            now = time.monotonic()
+            if batch and _bursting(batch) and now - (held or now) < HOLD_MAX:
+                held = held or now
+                continue
             self._deliver(out)
+            held = 0.0
 
     def _step(self, sub: Subscription, payload: object, out: list) -> None:
         with self._lock:
@@ -317,6 +338,12 @@ class Dispatcher:
             except Exception:  # a user's callback must not stop delivery to the others
                 log.exception("subscription callback failed on change %s", change.id)
         out.clear()
+
+
+def _bursting(batch: list) -> bool:
+    """Return whether a batch ended in a part of a big changeset (more may be on their way)."""
+    last = batch[-1]
+    return last is not None and last[0].bursting
 
 
 def _same(a: Change, b: Change) -> bool:

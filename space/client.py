@@ -15,7 +15,6 @@ from contextlib import ExitStack, contextmanager
 from types import TracebackType
 from typing import TYPE_CHECKING
 
-import zenoh
 from rdflib import Graph, URIRef
 
 from space import keys
@@ -105,6 +104,7 @@ class TripleSpace(Reads, Watching):
             if self._owns_session:
                 steps.callback(self.session.close)
             steps.callback(self._dispatcher.close)
+            steps.callback(self._queriers.close)
             for watchdog in watchdogs:
                 steps.callback(watchdog.undeclare)
             for sub in subscriptions:
@@ -167,7 +167,7 @@ class TripleSpace(Reads, Watching):
                 `timeout`; the changeset may still be applied.
             ChangesetRejected: the store refused it.
         """
-        reply = ask_store(self.session, self._key("write"), cs.encode(), timeout, what="write")
+        reply = ask_store(self._queriers, self._key("write"), cs.encode(), timeout, what="write")
         ack = Ack.of(cs.id, reply)
         return ack.check() if (self.strict if strict is None else strict) else ack
 
@@ -178,7 +178,7 @@ class TripleSpace(Reads, Watching):
         raises what `send` raises. Changesets sent one after the other are applied
         in that order, so a writer may keep several in flight.
         """
-        return Pending(self.session, self._key("write"), cs.encode(), timeout, what="write")
+        return Pending(self._queriers, self._key("write"), cs.encode(), timeout, what="write")
 
     def send_rows_later(
         self,
@@ -203,13 +203,11 @@ class TripleSpace(Reads, Watching):
             lifespan=check_lifespan(life) or None,
         )
         payload = cs.encode([added, [], [], []])
-        return cs.id, Pending(self.session, self._key("write"), payload, timeout, what="write")
+        return cs.id, Pending(self._queriers, self._key("write"), payload, timeout, what="write")
 
     def send_nowait(self, cs: Changeset) -> str:
         """Send a changeset without waiting (fire-and-forget twin of `send`); return its id."""
-        self.session.put(
-            self._key("write"), cs.encode(), congestion_control=zenoh.CongestionControl.BLOCK
-        )
+        self._queriers.put(self._key("write"), cs.encode())
         return cs.id
 
     def write(

@@ -16,33 +16,18 @@ import time
 from collections import Counter
 from dataclasses import dataclass, field
 
+from etcdhosts import NAMES, EtcdHosts
 from netns import REPO, Network, Proc
 
-from space.store.etcd_member import Member, member_argv
-
 NODE = REPO / "tests" / "programs" / "log_node.py"
-LEADER = REPO / "tests" / "programs" / "etcd_leader.py"
-NAMES = ("a", "b", "c")
 
 
-class LogFleet:
+class LogFleet(EtcdHosts):
     """The etcd members and log nodes of a `Network` of hosts `a`, `b`, `c`."""
 
     def __init__(self, net: Network) -> None:
-        self.net = net
-        self.out = net.workdir / "ops"
-        self.out.mkdir(parents=True, exist_ok=True)
-        self.members = {
-            h: Member(h, net[h].address, 2379, 2380, net.workdir / f"{h}-etcd") for h in NAMES
-        }
-        self.etcd: dict[str, Proc] = {}
+        super().__init__(net)
         self.nodes: dict[str, Proc] = {}
-
-    def endpoints(self, first: str) -> list[str]:
-        """Return the members' targets, `first`'s own member first."""
-        return [self.members[first].endpoint] + [
-            m.endpoint for h, m in self.members.items() if h != first
-        ]
 
     def start(self) -> None:
         """Start every member and node; return once every node had a write acknowledged."""
@@ -54,45 +39,15 @@ class LogFleet:
             self.wait_acked(h, 30)
             self.net.wait(lambda h=h: self.revision(h) > 0, 30, f"a replica applying on {h}")
 
-    def start_etcd(self, host: str) -> None:
-        """Start (or restart: etcd then ignores the initial-cluster flags) the member on `host`."""
-        argv = member_argv(self.members[host], list(self.members.values()), "tspace-faults")
-        self.etcd[host] = self.net[host].popen("etcd", argv)
-
     def start_node(self, host: str) -> None:
         """Start (or restart: it resumes from what it applied) the log node on `host`."""
         argv = [sys.executable, str(NODE), host, str(self.out), *self.endpoints(host)]
         self.nodes[host] = self.net[host].popen("node", argv)
 
-    def kill_etcd(self, host: str) -> None:
-        """kill -9 the member on `host`."""
-        self.etcd[host].stop(signal.SIGKILL)
-
-    def kill_node(self, host: str) -> None:
-        """kill -9 the log node on `host`."""
+    def restart_worker(self, host: str) -> None:
+        """kill -9 the log node on `host` and start it again."""
         self.nodes[host].stop(signal.SIGKILL)
-
-    def leader(self) -> str:
-        """Return the host whose member leads now (asked from host a, waited for)."""
-        names = list(NAMES)
-        deadline = time.monotonic() + 10
-        while True:
-            for asker in names:
-                argv = [sys.executable, str(LEADER), *self.endpoints(asker)]
-                proc = self.net[asker].popen("leader", argv)
-                proc.popen.wait(timeout=20)
-                last = proc.logs().strip().splitlines()
-                if last and last[-1].lstrip("-").isdigit() and int(last[-1]) >= 0:
-                    order = [asker] + [h for h in names if h != asker]
-                    return order[int(last[-1])]
-            if time.monotonic() > deadline:
-                raise TimeoutError("no etcd member leads")
-            time.sleep(0.2)
-
-    def ops(self, host: str) -> list[dict]:
-        """Return every outcome the node on `host` recorded."""
-        path = self.out / f"{host}-ops.jsonl"
-        return [json.loads(x) for x in path.read_text().splitlines()] if path.exists() else []
+        self.start_node(host)
 
     def applied(self, host: str) -> list[dict]:
         """Return every whole line the replica on `host` applied."""
@@ -109,14 +64,6 @@ class LogFleet:
         """Return the last revision the replica on `host` applied."""
         lines = self.applied(host)
         return lines[-1]["rev"] if lines else 0
-
-    def wait_acked(self, host: str, timeout: float, after: float = 0.0) -> None:
-        """Wait until `host`'s node had a write acknowledged after time `after`."""
-        self.net.wait(
-            lambda: any(o["ok"] and o["t"] > after for o in self.ops(host)),
-            timeout,
-            f"an acknowledged write on {host}",
-        )
 
     def quiesce(self) -> float:
         """Stop every writer and taker; return how long until all replicas were identical."""

@@ -9,40 +9,27 @@ catches up once writing stops (none stuck).
 
 from __future__ import annotations
 
-import json
 import signal
 import sys
 import time
 from collections import Counter
 from dataclasses import dataclass, field
 
-from logfleet import LEADER, NAMES
+from etcdhosts import NAMES, EtcdHosts
 from netns import PORT, REPO, Network, Proc
 
 from space import SpaceError, TripleSpace
-from space.store.etcd_member import Member, member_argv
 
 ROBOTS = REPO / "tests" / "programs" / "store_node.py"
 
 
-class StoreFleet:
+class StoreFleet(EtcdHosts):
     """The etcd members, replicas and robots of a `Network` of hosts `a`, `b`, `c`."""
 
     def __init__(self, net: Network) -> None:
-        self.net = net
-        self.out = net.workdir / "ops"
-        self.out.mkdir(parents=True, exist_ok=True)
-        self.members = {
-            h: Member(h, net[h].address, 2379, 2380, net.workdir / f"{h}-etcd") for h in NAMES
-        }
-        self.etcd: dict[str, Proc] = {}
+        super().__init__(net)
         self.replicas: dict[str, Proc] = {}
         self.robots: dict[str, Proc] = {}
-
-    def endpoints(self, first: str) -> list[str]:
-        """Return the members' targets, `first`'s own member first."""
-        own = self.members[first].endpoint
-        return [own] + [m.endpoint for m in self.members.values() if m.endpoint != own]
 
     def start(self) -> None:
         """Start every member, replica and host's robots; return once each host had an ack."""
@@ -56,54 +43,15 @@ class StoreFleet:
         for h in NAMES:
             self.wait_acked(h, 60)
 
-    def start_etcd(self, host: str) -> None:
-        """Start (or restart) the member on `host`."""
-        argv = member_argv(self.members[host], list(self.members.values()), "tspace-faults")
-        self.etcd[host] = self.net[host].popen("etcd", argv)
-
     def start_replica(self, host: str) -> None:
         """Start (or restart: it resumes from the revision it applied) the replica on `host`."""
         args = ["--cluster", ",".join(self.endpoints(host))]
         self.replicas[host] = self.net[host].serve(args=args)
 
-    def kill_etcd(self, host: str) -> None:
-        """kill -9 the member on `host`."""
-        self.etcd[host].stop(signal.SIGKILL)
-
-    def kill_replica(self, host: str) -> None:
-        """kill -9 the replica (and its router) on `host`."""
+    def restart_worker(self, host: str) -> None:
+        """kill -9 the replica (and its router) on `host` and start it again."""
         self.replicas[host].stop(signal.SIGKILL)
-
-    def leader(self) -> str:
-        """Return the host whose member leads now."""
-        deadline = time.monotonic() + 10
-        while True:
-            for asker in NAMES:
-                proc = self.net[asker].popen(
-                    "leader", [sys.executable, str(LEADER), *self.endpoints(asker)]
-                )
-                proc.popen.wait(timeout=20)
-                last = proc.logs().strip().splitlines()
-                if last and last[-1].lstrip("-").isdigit() and int(last[-1]) >= 0:
-                    order = [asker] + [h for h in NAMES if h != asker]
-                    return order[int(last[-1])]
-            if time.monotonic() > deadline:
-                raise TimeoutError("no etcd member leads")
-            time.sleep(0.2)
-
-    def ops(self, host: str) -> list[dict]:
-        """Return every outcome the robots on `host` recorded."""
-        path = self.out / f"{host}-ops.jsonl"
-        lines = path.read_text().splitlines() if path.exists() else []
-        return [json.loads(x) for x in lines if x.endswith("}")]
-
-    def wait_acked(self, host: str, timeout: float, after: float = 0.0) -> None:
-        """Wait until a write on `host` was acknowledged after time `after`."""
-        self.net.wait(
-            lambda: any(o["ok"] and o["t"] > after for o in self.ops(host)),
-            timeout,
-            f"an acknowledged write on {host}",
-        )
+        self.start_replica(host)
 
     def seqs(self) -> dict[str, int]:
         """Return each replica's sequence number of the space (-1: it does not answer)."""

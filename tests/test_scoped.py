@@ -220,6 +220,27 @@ def test_a_changeset_on_several_selected_keys_arrives_whole_with_one_id_and_seq(
     assert sorted(t for c in seen for t in c.added) == sorted(triples[:2])
 
 
+def test_a_changeset_of_many_parts_is_delivered_in_few_changes(ts):
+    # A robot's 200 settings turned from one value to another, 200 keys: delivered a
+    # handful of parts at a time, an agent would act on a dozen partial changes; the
+    # parts' `n` has the library wait for the rest.
+    def settings(value: str) -> list:
+        return [(AC.robot1_base, AC[f"setting_{i}"], Literal(value)) for i in range(200)]
+
+    ts.write(settings("normal"))
+    seen = []
+    ts.subscribe(None, seen.append, scope=SCOPE)
+    acks = [
+        ts.apply(settings("low"), settings("normal")),
+        ts.apply(settings("normal"), settings("low")),
+        ts.apply(settings("low"), settings("normal")),
+    ]
+    wait_for(lambda: sum(len(c.added) for c in seen) >= 600, what="all 600 parts")
+    assert [c.seq for c in seen] == sorted(c.seq for c in seen)
+    assert {c.seq for c in seen} == {ack.seq for ack in acks}
+    assert len(seen) <= 15, f"3 changesets delivered in {len(seen)} changes"  # 55-91 without `n`
+
+
 def test_a_robots_hw_monitor_hears_its_robot_and_the_site_not_the_fleet_nor_records(ts):
     from agents.base import robot_scope
     from agents.firings import FiringLog

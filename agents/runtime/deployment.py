@@ -259,8 +259,8 @@ class Deployment:
             self.scenario = ScenarioRun(
                 options.scenario, self.robot, self.view.event, step_timeout=options.step_timeout
             )
-            run = self.scenario
-            self.mirror.watch(lambda: run.observe(self.mirror))
+        if self.scenario is not None or self.view.logs_every_change:
+            self.mirror.watch(self._on_change)
         self.mirror.attach(ts)
         # Replicas on etcd say whether they reach a quorum; an embedded store says nothing.
         self.cluster = ClusterWatch(ts.session)
@@ -286,6 +286,13 @@ class Deployment:
             print("tspace up: stopped before the scenario completed", file=sys.stderr)
             return 1
         return 0
+
+    def _on_change(self) -> None:
+        """Read the robots after each changeset, so the scenario and the log see every state."""
+        robots = read_robots(self.mirror.copy())
+        self.view.robots(robots)
+        if self.scenario is not None:
+            self.scenario.observe(robots)
 
     def _tick_scenario(self, ts: TripleSpace, run: ScenarioRun) -> int | None:
         """Advance the scenario; return an exit code when a `--once` run is over."""

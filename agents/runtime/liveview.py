@@ -95,8 +95,33 @@ class LiveView:
             if not self._redraw:
                 print(f"tspace up: {line}", file=self._err, flush=True)
 
+    @property
+    def logs_every_change(self) -> bool:
+        """Return True in log mode, where `robots` must be fed every state the robots pass."""
+        return not self._redraw
+
+    def robots(self, robots: list[RobotState]) -> None:
+        """Log the robots' lines that changed (log mode); callable from any thread.
+
+        Fed after each changeset, so a state that lasts less than a redraw (a
+        robot docking) is still in the log; a redraw shows only the latest.
+        """
+        if self._redraw:
+            return
+        lines = []
+        with self._lock:
+            for robot in robots:
+                summary = (robot_line(robot), devices_line(robot))
+                before = self._seen_robots.get(robot.name)
+                if before is None or before[0] != summary[0]:
+                    lines.append(summary[0])
+                if before is None or before[1] != summary[1]:
+                    lines.append(f"{robot.name} devices: {summary[1]}")
+                self._seen_robots[robot.name] = summary
+            self._write(lines)
+
     def show(self, frame: Frame, final: bool = False) -> None:
-        """Redraw (at most every REDRAW_EVERY s unless `final`) or log what changed."""
+        """Redraw (at most every REDRAW_EVERY s unless `final`) or log new firings."""
         if self._redraw:
             self._draw(frame, final)
         else:
@@ -110,19 +135,15 @@ class LiveView:
 
     def _log(self, frame: Frame) -> None:
         lines = []
-        for robot in frame.robots:
-            summary = (robot_line(robot), devices_line(robot))
-            before = self._seen_robots.get(robot.name)
-            if before is None or before[0] != summary[0]:
-                lines.append(summary[0])
-            if before is None or before[1] != summary[1]:
-                lines.append(f"{robot.name} devices: {summary[1]}")
-            self._seen_robots[robot.name] = summary
         for firing in reversed(frame.firings):
             if firing.seq > self._seen_seq:
                 lines.append(f"firing: {firing_line(firing, self._raw)}")
         if frame.firings:
             self._seen_seq = max(self._seen_seq, frame.firings[0].seq)
+        with self._lock:
+            self._write(lines)
+
+    def _write(self, lines: list[str]) -> None:
         if lines:
             self._out.write("".join(f"{line}\n" for line in lines))
             self._out.flush()

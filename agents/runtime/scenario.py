@@ -202,9 +202,9 @@ class ScenarioRun:
                 f"{steps[self._index].name}"
             )
 
-    def observe(self, mirror: SpaceMirror) -> None:
-        """Advance past every step that the space's current state satisfies."""
-        robot = next((r for r in read_robots(mirror.copy()) if r.name == self.robot), None)
+    def observe(self, robots: list[RobotState]) -> None:
+        """Advance past every step that the robots' current states (read off the space) satisfy."""
+        robot = next((r for r in robots if r.name == self.robot), None)
         if robot is None:
             return
         with self._lock:
@@ -249,7 +249,7 @@ class ScenarioRun:
             with self._lock:
                 self._acted = index
                 self._since = time.monotonic()
-            self.observe(mirror)
+            self.observe(read_robots(mirror.copy()))
         elif overdue:
             self.failure = (
                 f"step {index + 1}/{len(self.scenario.steps)} did not happen within "

@@ -1,21 +1,24 @@
-"""Compile rules for one engine: join functions, head builders, and the index that finds them.
+"""Bind rules to one engine: join functions, head builders, and the index that finds them.
 
-The index maps a triple to the joins it can start: by constant predicate and
-object, by constant predicate, or (for patterns with a variable predicate) a
-bucket every triple visits. A triple whose predicate no rule mentions costs a
-few dictionary misses.
+The code of each rule comes compiled from `rulecode` (once per shape of rule, per
+process); binding it gives the engine's functions. The index maps a triple to the
+joins it can start: by constant predicate and object, by constant predicate, or
+(for patterns with a variable predicate) a bucket every triple visits. A triple
+whose predicate no rule mentions costs a few dictionary misses.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 from rdflib.term import Node
 
 from space.reasoning.builtins import Args, Builtin, Effect
-from space.reasoning.joins import Heads, JoinCompiler, Trigger
-from space.reasoning.rules import Call, Functor, Pattern, Rule, Var, variables
+from space.reasoning.joins import Heads, Trigger
+from space.reasoning.rulecode import calls, code_of, shape
+from space.reasoning.rules import Call, Functor, Pattern, Rule, Var
+from space.reasoning.terms import TermTable
 
 ArgsFn = Callable[[tuple], Args]
 
@@ -81,89 +84,73 @@ class RuleIndex:
         yield from self._removal_by_p.get(p, ())
         yield from self._removal_anywhere
 
-    def add(self, compiler: JoinCompiler, rule: Rule, order: int) -> CompiledRule:
-        """Compile a (checked) rule and index its joins."""
+    def add(self, terms: TermTable, env: tuple, rule: Rule, order: int) -> CompiledRule:
+        """Bind a (checked) rule's code to an engine (`env`: `joins.environment`); index its joins.
+
+        Raises:
+            RuleError: the rule cannot be compiled.
+        """
         self._starts.clear()
         self._starts_by_p.clear()
-        slots = _slots(rule)
+        form = shape(rule)
+        code = code_of(rule, form)
+        ids = tuple(map(terms.id, form.constants))
+        runs = tuple(i.builtin.run if isinstance(i, Call) else None for i in rule.body)
+
+        def bind(factory: Callable) -> Callable:
+            return factory(env, ids, runs)
+
         premise_of = {}
         for index, item in enumerate(rule.body):
             if isinstance(item, Pattern):
                 premise_of[index] = len(premise_of)
-        calls = [i for i in rule.head if isinstance(i, Call)]
+        heads = [i for i in rule.head if isinstance(i, Call)]
         compiled = CompiledRule(
             rule=rule,
             label=rule.label,
             order=order,
-            production=any(not c.builtin.monotonic for c in _calls(rule)),
-            heads=compiler.heads(rule, slots),
-            drops=_targets(calls, Effect.DROP, premise_of),
-            removes=_targets(calls, Effect.REMOVE, premise_of),
-            actions=tuple(
-                (c.builtin, compiler.args(c, slots))
-                for c in calls
-                if c.builtin.effect is Effect.NONE
-            ),
-            guards=tuple(
-                (c.builtin, compiler.args(c, slots))
-                for c in rule.body
-                if isinstance(c, Call) and not c.builtin.monotonic
-            ),
-            start=None if premise_of else compiler.trigger(rule, slots, None),
+            production=any(not c.builtin.monotonic for c in calls(rule)),
+            heads=bind(code.heads),
+            drops=_targets(heads, Effect.DROP, premise_of),
+            removes=_targets(heads, Effect.REMOVE, premise_of),
+            actions=tuple((_builtin(rule.head[i]), bind(f)) for i, f in code.head_args.items()),
+            guards=tuple((_builtin(rule.body[i]), bind(f)) for i, f in code.body_args.items()),
+            start=None if code.start is None else bind(code.start),
         )
-        for index, item in enumerate(rule.body):
+        for index, factory in code.triggers.items():
+            entry = (compiled, bind(factory))
+            item = rule.body[index]
             if isinstance(item, Pattern):
-                entry = (compiled, compiler.trigger(rule, slots, index))
-                self._file(entry, item.p, item.o, compiler)
-            elif item.name == "countLiteralValues" and rule.backward:
+                self._file(entry, item.p, item.o, terms)
+            elif item.name == "countLiteralValues":
                 # Jena counts again at each query: wake the rule on every addition and
                 # removal with the counted predicate (what it concluded from an old count
                 # is withdrawn, space/reasoning/withdraw.py).
-                entry = (compiled, compiler.trigger(rule, slots, index))
-                self._on_change(entry, item.args[1], compiler)
-            elif item.name == "noValue" and compiled.production:
-                entry = (compiled, compiler.trigger(rule, slots, index))
-                predicate = item.args[1]
-                if isinstance(predicate, Var | Functor):
-                    self._removal_anywhere.append(entry)
-                else:
-                    key = compiler.constant(predicate)
-                    self._removal_by_p.setdefault(key, []).append(entry)
+                self._on_change(entry, item.args[1], terms)
+            elif isinstance(item.args[1], Var | Functor):  # noValue
+                self._removal_anywhere.append(entry)
+            else:
+                key = terms.id(item.args[1])
+                self._removal_by_p.setdefault(key, []).append(entry)
         return compiled
 
-    def _on_change(self, entry: Entry, p: object, compiler: JoinCompiler) -> None:
+    def _on_change(self, entry: Entry, p: object, terms: TermTable) -> None:
         if isinstance(p, Var | Functor):
             self.anywhere.append(entry)
             self._removal_anywhere.append(entry)
         else:
-            key = compiler.constant(p)  # type: ignore[arg-type]
+            key = terms.id(p)  # type: ignore[arg-type]
             self.by_p.setdefault(key, []).append(entry)
             self._removal_by_p.setdefault(key, []).append(entry)
 
-    def _file(self, entry: Entry, p: object, o: object, compiler: JoinCompiler) -> None:
+    def _file(self, entry: Entry, p: object, o: object, terms: TermTable) -> None:
         if isinstance(p, Var | Functor):
             self.anywhere.append(entry)
         elif isinstance(o, Var | Functor):
-            self.by_p.setdefault(compiler.constant(p), []).append(entry)  # type: ignore[arg-type]
+            self.by_p.setdefault(terms.id(p), []).append(entry)  # type: ignore[arg-type]
         else:
-            key = (compiler.constant(p), compiler.constant(o))  # type: ignore[arg-type]
+            key = (terms.id(p), terms.id(o))  # type: ignore[arg-type]
             self.by_po.setdefault(key, []).append(entry)
-
-
-def _calls(rule: Rule) -> Iterator[Call]:
-    for item in (*rule.body, *rule.head):
-        if isinstance(item, Call):
-            yield item
-
-
-def _slots(rule: Rule) -> dict[Var, int]:
-    slots: dict[Var, int] = {}
-    for item in (*rule.body, *rule.head):
-        terms: Sequence[object] = item.terms if isinstance(item, Pattern) else item.args
-        for term in terms:
-            for var in variables(term):  # type: ignore[arg-type]
-                slots.setdefault(var, len(slots))
-    return slots
 
 
 def _targets(calls: list[Call], effect: Effect, premise_of: dict[int, int]) -> tuple[int, ...]:
@@ -172,6 +159,11 @@ def _targets(calls: list[Call], effect: Effect, premise_of: dict[int, int]) -> t
         if call.builtin.effect is effect:
             targets.extend(premise_of[int(_value(a))] for a in call.args)
     return tuple(targets)
+
+
+def _builtin(item: object) -> Builtin:
+    assert isinstance(item, Call)
+    return item.builtin
 
 
 def _value(term: object) -> object:

@@ -25,7 +25,7 @@ from space.reasoning.compile import CompiledRule, RuleIndex
 from space.reasoning.delta import Delta, Firing
 from space.reasoning.errors import RuleError, RuleLoopError
 from space.reasoning.forms import value_patterns
-from space.reasoning.joins import JoinCompiler, Match
+from space.reasoning.joins import Match, environment
 from space.reasoning.owl import owl_rules
 from space.reasoning.parser import load_rules
 from space.reasoning.rdffiles import rdf_graph, read_graph
@@ -75,10 +75,10 @@ class RuleEngine(EngineReads):
         self.terms = TermTable() if terms is None else terms  # HybridEngine: shared
         self._store = TripleStore()
         self._ctx = Context(self.terms, self._store, printer)
-        compiler = JoinCompiler(self.terms, self._store, self._ctx)
+        env = environment(self.terms, self._store, self._ctx)
         index = RuleIndex()
-        extra = owl_rules(tbox) if owl else []
-        self._compiled = [index.add(compiler, r, i) for i, r in enumerate([*runnable, *extra])]
+        everything = [*runnable, *(owl_rules(tbox) if owl else [])]
+        self._compiled = [index.add(self.terms, env, r, i) for i, r in enumerate(everything)]
         self._index = index
         # Backward rules with noValue: their conclusions go when no match holds (as Jena's).
         held = [c.order for c in self._compiled if c.rule.backward and withdrawable(c)]
@@ -146,7 +146,7 @@ class RuleEngine(EngineReads):
         if not self._loaded:
             plus = self._ontology + plus
         self._log.begin(plus, minus)
-        self._firings = []
+        self._firings.clear()
         self._agenda.reset()
         try:
             self._unassert(minus, notify=True)
@@ -169,7 +169,7 @@ class RuleEngine(EngineReads):
     def _apply_monotonic(self, plus: list[T], minus: list[T]) -> Delta:
         """Apply a change with production rules off: after a loop, the caller's triples stay."""
         self._log.begin(plus, minus)
-        self._firings = []
+        self._firings.clear()
         self._production = False
         try:
             self._unassert(minus, notify=True)

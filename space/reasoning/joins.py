@@ -6,6 +6,12 @@ indexes, and runs each builtin as soon as its inputs are bound. It appends
 `(premises, bindings)` for every match to the list it is given. Generating the
 nested loops as source and compiling them is what makes a join cost a few
 microseconds instead of tens.
+
+The source names no engine and no constant: each function is made by a factory
+`make(ENV, K, B)` that binds the engine's store and context (`ENV`, see
+`environment`), the rule's constants as term ids (`K<i>`, the i-th distinct
+constant, `space.reasoning.rulecode`) and its body builtins (`B<i>`, body item i).
+So the code is compiled once for every rule of the same shape and every engine.
 """
 
 from __future__ import annotations
@@ -26,8 +32,27 @@ from space.reasoning.triples import T, TripleStore
 Match = tuple[tuple[T, ...], tuple[int | None, ...]]
 Trigger = Callable[[int, int, int, list[Match]], None]
 Heads = Callable[[tuple[int | None, ...]], tuple[T, ...]]
+Factory = Callable[[tuple, tuple, tuple], Callable]
+"""`make(ENV, K, B)`: one engine's function for one rule (see the module's docstring)."""
 
 _EMPTY: dict = {}
+_ENV = "TRIPLES, SPO, POS, OSP, E, CTX, TERM, KEYS, FV, MKF"
+
+
+def environment(terms: TermTable, store: TripleStore, ctx: Context) -> tuple:
+    """Return what an engine's join functions use (`ENV`): its store, context and terms."""
+    return (
+        store.triples,
+        store.spo,
+        store.pos,
+        store.osp,
+        _EMPTY,
+        ctx,
+        terms.term,
+        terms.keys,
+        FunctorValue,
+        lambda name, args: terms.id(FunctorValue(name, args)),
+    )
 
 
 @dataclass
@@ -56,69 +81,69 @@ class _Source:
 
 
 class JoinCompiler:
-    """Compile the rules of one engine against its term table, store and context."""
+    """Generate the factories of one rule's functions.
 
-    def __init__(self, terms: TermTable, store: TripleStore, ctx: Context) -> None:
-        self.terms = terms
-        self.namespace: dict[str, object] = {
-            "TRIPLES": store.triples,
-            "SPO": store.spo,
-            "POS": store.pos,
-            "OSP": store.osp,
-            "E": _EMPTY,
-            "CTX": ctx,
-            "TERM": terms.term,
-            "KEYS": terms.keys,
-            "FV": FunctorValue,
-            "MKF": lambda name, args: terms.id(FunctorValue(name, args)),
-        }
-        self.count = 0
+    Args:
+        rule: the (checked) rule.
+        slots: the position of each variable in a match's bindings.
+        constants: the K index of each constant of the rule.
+    """
 
-    def trigger(self, rule: Rule, slots: dict[Var, int], seed: int | None) -> Trigger:
+    def __init__(self, rule: Rule, slots: dict[Var, int], constants: dict[Node, int]) -> None:
+        self.rule = rule
+        self.slots = slots
+        self.constants = constants
+        self.builtins: set[int] = set()  # the B<i> the function being generated calls
+
+    def trigger(self, seed: int | None) -> Factory:
         """Return the join that starts from a triple matching body item `seed`.
 
         The seed is a pattern (the triple was added) or a `noValue` call (the
         triple was removed, so the call may now accept). With no seed, the join
         starts from nothing (an axiom, a body of builtins only) and ignores the triple.
         """
-        gen = _Body(self, rule, slots)
-        return self._define(f"_trigger{self.count}", "s_, p_, o_, out", gen.trigger(seed))
+        gen = _Body(self, self.rule, self.slots)
+        return self._define("_trigger", "s_, p_, o_, out", gen.trigger(seed))
 
-    def heads(self, rule: Rule, slots: dict[Var, int]) -> Heads:
+    def heads(self) -> Factory:
         """Return a function that instantiates the head patterns from bindings."""
         triples = [
-            f"({', '.join(self._head_term(t, slots) for t in item.terms)})"
-            for item in rule.head
+            f"({', '.join(self._head_term(t) for t in item.terms)})"
+            for item in self.rule.head
             if isinstance(item, Pattern)
         ]
         body = ["    return (" + "".join(t + ", " for t in triples) + ")"]
-        return self._define(f"_heads{self.count}", "b", body)
+        return self._define("_heads", "b", body)
 
-    def args(self, call: Call, slots: dict[Var, int]) -> Callable[[tuple], tuple]:
+    def args(self, call: Call) -> Factory:
         """Return a function that builds a call's encoded arguments from bindings."""
-        parts = [self._head_term(a, slots) for a in call.args]
-        return self._define(
-            f"_args{self.count}", "b", [f"    return ({''.join(p + ', ' for p in parts)})"]
-        )
+        parts = [self._head_term(a) for a in call.args]
+        return self._define("_args", "b", [f"    return ({''.join(p + ', ' for p in parts)})"])
 
-    def constant(self, term: Node | FunctorValue) -> int:
-        """Return the id of a constant term."""
-        return self.terms.id(term)
+    def constant(self, term: Node) -> str:
+        """Return the name of a constant term in the generated code."""
+        return f"K{self.constants[term]}"
 
-    def _head_term(self, term: Term, slots: dict[Var, int]) -> str:
+    def _head_term(self, term: Term) -> str:
         if isinstance(term, Var):
-            return f"b[{slots[term]}]"
+            return f"b[{self.slots[term]}]"
         if isinstance(term, Functor):
-            args = "".join(self._head_term(a, slots) + ", " for a in term.args)
+            args = "".join(self._head_term(a) + ", " for a in term.args)
             return f"MKF({term.name!r}, ({args}))"
-        return str(self.constant(term))
+        return self.constant(term)
 
-    def _define(self, name: str, params: str, body: list[str]) -> Callable:
-        self.count += 1
-        source = "\n".join([f"def {name}({params}):", *body])
+    def _define(self, name: str, params: str, body: list[str]) -> Factory:
+        """Compile the factory of one function: it binds ENV, K and B, then defines it."""
+        lines = ["def make(ENV, K, B):", f"    {_ENV} = ENV"]
+        if self.constants:
+            lines.append(f"    {''.join(f'K{i}, ' for i in range(len(self.constants)))}= K")
+        lines += [f"    B{i} = B[{i}]" for i in sorted(self.builtins)]
+        lines += [f"    def {name}({params}):", *("    " + line for line in body)]
+        lines.append(f"    return {name}")
+        self.builtins = set()
         scope: dict[str, object] = {}
-        exec(compile(source, f"<rule join {name}>", "exec"), self.namespace, scope)
-        return scope[name]  # type: ignore[return-value]
+        exec(compile("\n".join(lines), f"<rule join {name}>", "exec"), scope)
+        return scope["make"]  # type: ignore[return-value]
 
 
 _ACCESS = {
@@ -210,7 +235,7 @@ class _Body:
             return None
         if isinstance(term, Var):
             return self.bound.get(term)
-        return str(self.compiler.constant(term))
+        return self.compiler.constant(term)
 
     def _rank(self, pattern: Pattern) -> tuple[int, int]:
         """Rank by access path, then prefer joining on a bound variable over a class extent."""
@@ -294,8 +319,8 @@ class _Body:
             self.src.emit(f"if {test}:")
             self.src.emit(f"    {self.src.skip()}")
             return
-        name = f"B{self.compiler.count}_{index}"
-        self.compiler.namespace[name] = call.builtin.run
+        name = f"B{index}"
+        self.compiler.builtins.add(index)
         result = self.src.temp()
         self.src.emit(f"{result} = {name}(CTX, ({''.join(a + ', ' for a in args)}))")
         self.src.emit(f"if {result} is None:")

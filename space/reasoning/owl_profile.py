@@ -2,6 +2,10 @@
 
 The rules are complete for OWL 2 RL; these constructs are outside it (they
 need existentials or counting above one), so nothing is derived from them.
+Some class expressions are in OWL 2 RL on one side of a subclass axiom only:
+an existential or a union as a subclass (its members are recognised), a
+universal, a complement or a maximum as a superclass (its members are
+constrained); on the other side nothing is derived from them either.
 Building an engine warns about each (`UnsupportedAxiom`), naming the
 construct and the class or property it is on.
 """
@@ -11,7 +15,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Iterator
 
-from rdflib import OWL, RDF, BNode, Graph
+from rdflib import OWL, RDF, RDFS, BNode, Graph
 from rdflib.term import Node
 
 from space.reasoning.owl_build import cardinality
@@ -26,6 +30,17 @@ _OUTSIDE = {
     OWL.withRestrictions: "owl:withRestrictions (datatype restriction)",
     OWL.datatypeComplementOf: "owl:datatypeComplementOf",
     OWL.onDataRange: "owl:onDataRange (qualified data cardinality)",
+}
+_SUBCLASS_ONLY = {
+    OWL.someValuesFrom: "owl:someValuesFrom (an existential)",
+    OWL.unionOf: "owl:unionOf",
+    OWL.oneOf: "owl:oneOf",
+}
+_SUPERCLASS_ONLY = {
+    OWL.allValuesFrom: "owl:allValuesFrom",
+    OWL.complementOf: "owl:complementOf",
+    OWL.maxCardinality: "owl:maxCardinality",
+    OWL.maxQualifiedCardinality: "owl:maxQualifiedCardinality",
 }
 _TYPES = {OWL.ReflexiveProperty: "owl:ReflexiveProperty (every individual would relate to itself)"}
 
@@ -48,6 +63,23 @@ def outside_rl(g: Graph) -> Iterator[str]:
             if n is None or n > 1:
                 what = f"{g.qname(prop)} {g.value(s, prop)} on {_name(g, s)}"
                 yield f"{what} is outside OWL 2 RL (0 or 1 only): ignored"
+    yield from _misplaced(g)
+
+
+def _misplaced(g: Graph) -> Iterator[str]:
+    """Yield one message per anonymous class expression on the side of a subclass axiom RL
+    leaves out (a named class defined by one, `C owl:unionOf (...)`, is taken as a name)."""
+    pairs = [*g.subject_objects(RDFS.subClassOf), *g.subject_objects(OWL.equivalentClass)]
+    pairs += [(b, a) for a, b in g.subject_objects(OWL.equivalentClass)]
+    for sub, sup in pairs:
+        for prop, what in _SUBCLASS_ONLY.items():
+            if isinstance(sup, BNode) and (sup, prop, None) in g:
+                where = f"as a superclass of {_name(g, sub)}"
+                yield f"{what} ({_name(g, sup)}) {where} is outside OWL 2 RL: ignored there"
+        for prop, what in _SUPERCLASS_ONLY.items():
+            if isinstance(sub, BNode) and (sub, prop, None) in g:
+                where = f"as a subclass of {_name(g, sup)}"
+                yield f"{what} ({_name(g, sub)}) {where} is outside OWL 2 RL: ignored there"
 
 
 def warn_outside_rl(g: Graph) -> list[str]:

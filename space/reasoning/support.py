@@ -9,7 +9,7 @@ rules (transitivity, sameAs) where counting alone would keep cycles alive.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Sequence
 
 from space.reasoning.triples import T, TripleStore
 
@@ -45,7 +45,7 @@ class Support:
 
     def retract(
         self,
-        doomed: Iterable[T],
+        doomed: Sequence[T],
         store: TripleStore,
         asserted: set[T],
         touch: Callable[[T], None],
@@ -57,9 +57,13 @@ class Support:
         that are gone for good, in the order they were reached.
         """
         triples = store.triples
+        if len(doomed) == 1:  # a firing's drop: no list built for it
+            (only,) = doomed
+            if only not in triples:
+                return []
+            if not self.dependents.get(only):
+                return self._retract_leaf(only, store)
         stack = [t for t in doomed if t in triples]
-        if len(stack) == 1 and not self.dependents.get(stack[0]):
-            return self._retract_leaf(stack[0], store)
         over: dict[T, None] = {}
         while stack:
             triple = stack.pop()

@@ -13,7 +13,7 @@ Two halves, with a seam between them that a replicated log plugs into
    acknowledges only after it, then `publish.Publisher` publishes.
 
 A replicated log takes the place of half 1's ordering: each replica installs
-the log's entries in its order (`SpaceState.install(payload)` → `Entry`), and
+the log's entries in its order (`SpaceState.install(wire, payload)` → `Entry`), and
 commits and publishes them exactly as above; a retried request is answered from
 `StoreDB.outcome(space, request_id)` in both cases.
 """

@@ -6,6 +6,8 @@ event loop in a daemon thread and offers the worker thread plain calls:
 
 - `append(entry)` returns a `concurrent.futures.Future` of the entry's
   position: the worker goes on deciding while 64 changesets are in flight;
+  `append_all(entries, done)` hands a whole batch over at once (one wake-up
+  of the loop, not one task and one wake-up per changeset);
 - `apply(revision, batches)` and `relist(listing)`, given at
   construction, are called in the loop thread for each committed revision:
   they must only hand the work to the worker (a queue), never block;
@@ -20,7 +22,7 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import threading
-from collections.abc import Coroutine, Sequence
+from collections.abc import Callable, Coroutine, Sequence
 from typing import Any, TypeVar
 
 from aetcd import rpc
@@ -31,6 +33,7 @@ from space.store.etcd_client import EtcdClient
 from space.store.etcd_log import ClusterLog, Entry, Position
 
 T = TypeVar("T")
+Done = asyncio.Future[Position]
 # Transactions in flight at once: etcd batches concurrent proposals into one Raft round, so a
 # changeset arriving while others commit is sent at once instead of waiting a round.
 INFLIGHT = 8
@@ -107,6 +110,21 @@ class ClusterNode:
         """Commit an entry; the future's result is its position (see `ClusterLog.append`)."""
         assert self.log is not None, "start() first"
         return asyncio.run_coroutine_threadsafe(self.log.append(entry), self._loop)
+
+    def append_all(self, entries: list[Entry], done: Callable[[int, Done], None]) -> None:
+        """Commit entries; `done(i, future)` runs in the loop's thread once entry i's is done.
+
+        The future is an `asyncio.Future` of the entry's position, done (read
+        it from any thread), failed as `append`'s fails.
+        """
+        log = self.log
+        assert log is not None, "start() first"
+
+        def submit() -> None:
+            for i, entry in enumerate(entries):
+                log.submit(entry).add_done_callback(lambda f, i=i: done(i, f))
+
+        self._loop.call_soon_threadsafe(submit)
 
     def read_barrier(self, timeout: float = 5.0) -> int:
         """Return the revision etcd has committed now; raise `NoQuorum` on a minority side."""

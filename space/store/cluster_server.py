@@ -177,13 +177,17 @@ class ClusterStoreServer(Serving):
         writer = self._writer
         assert writer is not None
         reads: list[Request] = []
-        going = True
+        going = None not in batch
+        # What etcd committed first: its writers are answered before new requests are
+        # decided, and those are decided on the state it makes.
         for item in batch:
-            if item is None:
-                going = False
-            elif isinstance(item, tuple):
+            if isinstance(item, tuple):
                 self._event(item)
-            elif item.kind == "write" or (
+        self._apply()
+        for item in batch:
+            if item is None or isinstance(item, tuple):
+                continue
+            if item.kind == "write" or (
                 item.kind == "query" and request_op(item.payload) == "take"
             ):
                 self._decide(item, 1)
@@ -194,14 +198,20 @@ class ClusterStoreServer(Serving):
                     self._read(item)
                 else:
                     reads.append(item)
+        self._apply()
+        if reads:
+            writer.ask_barrier(("reads", reads))
+        return going
+
+    def _apply(self) -> None:
+        """Send what was decided, then apply what etcd committed (`apply_pending`)."""
+        writer = self._writer
+        assert writer is not None
         try:
             writer.apply_pending()
         except Exception as exc:  # a bug: stop taking writes rather than diverge silently
             log.exception("replica failed to apply the log: refusing writes; restart it")
             writer.failed = f"internal error while applying: {type(exc).__name__}: {exc}"
-        if reads:
-            writer.ask_barrier(("reads", reads))
-        return going
 
     def _event(self, item: tuple) -> None:
         """Handle what etcd's thread or a barrier put on the queue."""

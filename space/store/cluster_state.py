@@ -67,7 +67,7 @@ class ClusterSpace(SpaceState):
         new = {k: v for k, v in bindings.items() if self._applied_prefixes.get(k) != v}
         self._stamps = self._applied_stamps  # type: ignore[assignment]
         try:
-            net = self.install(pack(wire))
+            net = self.install(wire, pack(wire))
         finally:
             self._stamps = ChainMap(self._flying_stamps, self._applied_stamps)  # type: ignore[assignment]
         net.entry.prefixes = new
@@ -79,10 +79,23 @@ class ClusterSpace(SpaceState):
         super().settle()
         self._flying_stamps.clear()
         for e in self.inflight:
-            self._net("t", e.removed, e.added)
-            self._net("i", e.inferred_removed, e.inferred_added)
+            self._intend("t", e.removed, e.added)
+            self._intend("i", e.inferred_removed, e.inferred_added)
             for s, p, lit in e.stamps_added:
                 self._flying_stamps[(s, p)] = lit.value
+
+    def _intend(self, which: str, removed: list, added: list) -> None:
+        """Note in the overlay the state an entry in flight leaves, as its net lists say.
+
+        No lookups: a triple it removes is absent afterwards, one it adds present,
+        whatever the database holds now, which is what `_net` would conclude.
+        """
+        for t in removed:
+            self._overlay[(which, t)] = False
+        for t in added:
+            self._overlay[(which, t)] = True
+            if which == "t":
+                self._pending_objects.setdefault((t[0], t[1]), set()).add(t[2])
 
     def landed(self, entry: Entry) -> None:
         """Forget an entry of ours once applied (settle afterwards)."""

@@ -34,7 +34,7 @@ from space.errors import MalformedPayload, SpaceError, WriteConflict
 from space.store import intake
 from space.store.cluster_expiry import ClusterExpiry
 from space.store.cluster_flights import Flight, chain, committed, guarded_entry
-from space.store.cluster_node import ClusterNode
+from space.store.cluster_node import ClusterNode, Done
 from space.store.cluster_state import ClusterSpace
 from space.store.db import CommitFailed, StoreDB
 from space.store.etcd_applier import Batch
@@ -214,13 +214,15 @@ class ClusterWriter:
     def flush(self) -> None:
         """Send what was decided, chained on our flights it read (before anything is applied)."""
         staged, self._staged = self._staged, []
-        for flight in staged:
-            if chain(flight, self._writers):
-                self._send(flight)
+        self._send([flight for flight in staged if chain(flight, self._writers)])
 
-    def _send(self, flight: Flight) -> None:
-        future = self.node.append(flight.entry)
-        future.add_done_callback(lambda f: self._events.put(("done", flight, f)))
+    def _send(self, flights: list[Flight]) -> None:
+        """Hand flights to etcd's thread at once; each one's outcome comes back as an event."""
+        if flights:
+            put = self._events.put
+            self.node.append_all(
+                [f.entry for f in flights], lambda i, f: put(("done", flights[i], f))
+            )
 
     def event(self, item: tuple) -> None:
         """Handle what etcd's thread reported (worker thread)."""
@@ -235,14 +237,13 @@ class ClusterWriter:
         elif kind == "barrier":
             self._barrier(item[1], item[2])
 
-    def _done(self, flight: Flight, future: concurrent.futures.Future) -> None:
+    def _done(self, flight: Flight, future: Done) -> None:
         if future.cancelled():
             self._fail(flight, SpaceError("not applied: the replica is stopping"))
             return
         error = future.exception()
         if error is None:
-            for ready in committed(flight, future.result()):
-                self._send(ready)
+            self._send(committed(flight, future.result()))
             return
         if isinstance(error, WriteConflict):
             self._conflict(flight)

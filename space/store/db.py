@@ -241,7 +241,7 @@ class StoreDB:
                 if revision is not None:
                     from space.store.cluster_db import revision_ops
 
-                    ops += revision_ops(revision)
+                    ops += revision_ops(self, revision)
                 self.store.update(" ;\n".join(ops))
             if self.durable:
                 self.store.flush()

@@ -140,15 +140,22 @@ class ClusterLog:
         was written), `NoQuorum` or `ClusterError` when etcd could not commit
         (it may still have: only a timeout is ambiguous, as with any store).
         """
-        if entry.size() > MAX_BYTES or entry.ops() > MAX_OPS:
-            raise ClusterError(
-                f"a changeset of {entry.size()} bytes and {entry.ops()} keys is over one "
-                f"transaction's limits ({MAX_BYTES} bytes, {MAX_OPS} keys)"
-            )
+        return await self.submit(entry)
+
+    def submit(self, entry: Entry) -> asyncio.Future[Position]:
+        """Queue one entry (from the loop's thread); return the future `append` awaits."""
         future: asyncio.Future[Position] = asyncio.get_running_loop().create_future()
+        if entry.size() > MAX_BYTES or entry.ops() > MAX_OPS:
+            future.set_exception(
+                ClusterError(
+                    f"a changeset of {entry.size()} bytes and {entry.ops()} keys is over one "
+                    f"transaction's limits ({MAX_BYTES} bytes, {MAX_OPS} keys)"
+                )
+            )
+            return future
         self._queue.append((entry, future))
         self._wake.set()
-        return await future
+        return future
 
     async def _commit_loop(self) -> None:
         while True:

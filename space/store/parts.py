@@ -81,6 +81,7 @@ class PartPublisher:
             last[key] = seq
             if send and len(key) <= MAX_KEY:
                 part["prev"] = prev
+                part["n"] = len(parts)
                 self.session.put(key, pack(part), congestion_control=block)
         if len(last) > MAX_KEYS:
             self._forget(space, last)

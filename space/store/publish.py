@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import logging
+import threading
 
 import zenoh
 
@@ -19,31 +20,54 @@ MAX_KEY = 60_000  # bytes: a longer triple key is not published (Zenoh refuses ~
 
 
 class Publisher:
-    """Publish on a session; writer thread only. `close` undeclares its matching publishers."""
+    """Publish on a session; writer thread only (`heartbeat` from any thread).
+
+    Each space's whole changesets and heartbeat go out on publishers declared once
+    (as Zenoh means a stream of puts on one key). Not `express`: at 2,000 changesets/s
+    a message per write cost the store a third of its rate (bench/fleet.py), and alone
+    it gained nothing measurable. `close` undeclares them all.
+    """
 
     def __init__(self, session: zenoh.Session, root: str) -> None:
         self.session = session
         self.root = root
         self._graph_publishers: dict[tuple[str, str], zenoh.Publisher] = {}
+        self._streams: dict[tuple[str, str], zenoh.Publisher] = {}  # (space, service) ->
+        self._lock = threading.Lock()
         self._parts = PartPublisher(session, root)
 
     def close(self) -> None:
-        """Undeclare the publishers used to learn whether anyone watches a graph."""
-        for publisher in self._graph_publishers.values():
+        """Undeclare every publisher declared."""
+        with self._lock:
+            streams, self._streams = list(self._streams.values()), {}
+        for publisher in [*self._graph_publishers.values(), *streams]:
             publisher.undeclare()
         self._graph_publishers = {}
         self._parts.close()
 
     def publish(self, committed: list[tuple[SpaceState, Net]]) -> None:
         """Publish committed changesets, whole first (every agent waits for them), then triples."""
-        block = zenoh.CongestionControl.BLOCK
         for state, net in committed:
-            key = keys.service_key(state.name, "changes", self.root)
-            self.session.put(key, net.entry.payload, congestion_control=block)
+            self._stream(state.name, "changes").put(net.entry.payload)
         for state, net in committed:
             self._parts.publish(state, net)
         for state, net in committed:
             self._triples(state, net)
+
+    def heartbeat(self, space: str, seq: int) -> None:
+        """Publish a space's sequence number on its `@/seq` key."""
+        self._stream(space, "seq").put(pack({"seq": seq}))
+
+    def _stream(self, space: str, service: str) -> zenoh.Publisher:
+        """Return the publisher of a space's service key, declaring it on first use."""
+        with self._lock:
+            publisher = self._streams.get((space, service))
+            if publisher is None:
+                publisher = self._streams[(space, service)] = self.session.declare_publisher(
+                    keys.service_key(space, service, self.root),
+                    congestion_control=zenoh.CongestionControl.BLOCK,
+                )
+            return publisher
 
     def note(self, state: SpaceState, net: Net) -> None:
         """Record a changeset another cluster replica publishes (its parts' `prev` chain)."""

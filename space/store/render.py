@@ -55,24 +55,63 @@ def update(
     *,
     fresh: bool = False,
 ) -> str:
-    """Return the SPARQL UPDATE of a batch: each entry's DELETE DATA, then its INSERT DATA.
+    """Return the SPARQL UPDATE of a batch: its net removals, then its net additions.
+
+    Applying the entries one after another (each one's removals, then its
+    additions) leaves each quad as the last entry that names it left it, so
+    the batch is one DELETE DATA and one INSERT DATA of those last states:
+    two operations to parse instead of two per entry, and a quad removed and
+    added again within the batch is not touched. Each space's sequence number
+    is written once, the batch's last (readers take the largest).
 
     `extra`: quads to delete and to insert after them (leases). `fresh`: the
     space was just cleared (a replica's copy), so nothing is removed.
     """
-    ops = [op for e in entries for op in _operations(e, fresh=fresh)]
-    for verb, quads in zip(("DELETE", "INSERT"), extra, strict=True):
-        if quads:
-            ops.append(f"{verb} DATA {{ {_quads(quads)} }}")
+    net: dict[tuple[str, str], bool] = {}  # (graph, "s p o") -> present afterwards
+    last = {e.space: e for e in entries}
+    for e in entries:
+        if not fresh:
+            for g, triples in _removals(e):
+                for s, p, o in triples:
+                    net[(g, f"{s} {p} {o}")] = False
+        for g, triples in _additions(e, seq=last[e.space] is e):
+            for s, p, o in triples:
+                net[(g, f"{s} {p} {o}")] = True
+    for present, quads in zip((False, True), extra, strict=True):
+        for q in quads:
+            net[(str(q.graph_name), f"{q.subject} {q.predicate} {q.object}")] = present
+    ops = []
+    for verb, present in (("DELETE", False), ("INSERT", True)):
+        by_graph: dict[str, list[str]] = {}
+        for (g, text), now in net.items():
+            if now is present:
+                by_graph.setdefault(g, []).append(text)
+        if by_graph:
+            body = " ".join(f"GRAPH {g} {{ {' . '.join(ts)} }}" for g, ts in by_graph.items())
+            ops.append(f"{verb} DATA {{ {body} }}")
     return " ;\n".join(ops)
 
 
-def _quads(quads: list[ox.Quad]) -> str:
-    """Return quads as GRAPH blocks, one per graph (a write's leases share theirs)."""
-    by_graph: dict[str, list[str]] = {}
-    for q in quads:
-        by_graph.setdefault(str(q.graph_name), []).append(f"{q.subject} {q.predicate} {q.object}")
-    return " ".join(f"GRAPH {g} {{ {' . '.join(ts)} }}" for g, ts in by_graph.items())
+def _removals(e: Entry) -> list[tuple[str, Iterable]]:
+    return [
+        (f"<{graph(e.space, 't').value}>", e.removed),
+        (f"<{graph(e.space, 'i').value}>", e.inferred_removed),
+        (f"<{graph(e.space, 'stamps').value}>", e.stamps_removed),
+    ]
+
+
+def _additions(e: Entry, *, seq: bool) -> list[tuple[str, Iterable]]:
+    meta = [q.triple for q in _meta(e)]
+    logged = [q.triple for q in log_quads(e.space, e.seq, e.request, e.payload, e.dropped)]
+    t = f"<{graph(e.space, 't').value}>"
+    return [
+        (t, e.added),
+        (t, e.plain),
+        (f"<{graph(e.space, 'i').value}>", e.inferred_added),
+        (f"<{graph(e.space, 'stamps').value}>", e.stamps_added),
+        (f"<{META.value}>", meta if seq else meta[1:]),
+        (f"<{log_graph(e.space).value}>", logged),
+    ]
 
 
 def _meta(e: Entry) -> list[ox.Quad]:
@@ -80,35 +119,3 @@ def _meta(e: Entry) -> list[ox.Quad]:
     quads = [ox.Quad(node, SEQ, ox.Literal(str(e.seq), datatype=INT), META)]
     quads += [ox.Quad(node, PREFIX, ox.Literal(f"{n} {ns}"), META) for n, ns in e.prefixes.items()]
     return quads
-
-
-def _block(g: ox.NamedNode, triples: Iterable) -> str:
-    body = " .\n".join(f"{s} {p} {o}" for s, p, o in triples)
-    return f"GRAPH <{g.value}> {{ {body} }}" if body else ""
-
-
-def _operations(e: Entry, *, fresh: bool) -> list[str]:
-    """Return the DELETE DATA and INSERT DATA of one entry (removals first, as in a changeset)."""
-    deletes = (
-        []
-        if fresh
-        else [
-            _block(graph(e.space, "t"), e.removed),
-            _block(graph(e.space, "i"), e.inferred_removed),
-            _block(graph(e.space, "stamps"), e.stamps_removed),
-        ]
-    )
-    logged = [q.triple for q in log_quads(e.space, e.seq, e.request, e.payload, e.dropped)]
-    inserts = [
-        _block(graph(e.space, "t"), e.added),
-        _block(graph(e.space, "t"), e.plain),
-        _block(graph(e.space, "i"), e.inferred_added),
-        _block(graph(e.space, "stamps"), e.stamps_added),
-        _block(META, [q.triple for q in _meta(e)]),
-        _block(log_graph(e.space), logged),
-    ]
-    ops = []
-    if any(deletes):
-        ops.append("DELETE DATA { " + " ".join(d for d in deletes if d) + " }")
-    ops.append("INSERT DATA { " + " ".join(i for i in inserts if i) + " }")
-    return ops

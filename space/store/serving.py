@@ -15,7 +15,7 @@ from collections.abc import Callable
 import zenoh
 
 from space import keys
-from space.changeset import pack, unpack
+from space.changeset import unpack
 from space.errors import MalformedPayload
 from space.store import intake, queries
 from space.store.db import StoreDB
@@ -145,9 +145,9 @@ class Serving:
 
     def _publish_seqs(self) -> None:
         """Publish each space's sequence number, so subscribers learn of changes they missed."""
-        for name, state in self._spaces.items():
+        for name, state in list(self._spaces.items()):
             if state.seq:
-                self.session.put(keys.service_key(name, "seq", self.root), pack({"seq": state.seq}))
+                self._publisher.heartbeat(name, state.seq)
 
 
 def request_op(payload: bytes | None) -> object:

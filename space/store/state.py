@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import pyoxigraph as ox
 
-from space.changeset import WIRE_VERSION, hlc_key, pack, published_seq, unpack
+from space.changeset import WIRE_VERSION, hlc_key, pack, published_seq
 from space.prefixes import PrefixMap
 from space.store import oxterms
 from space.store.db import FUNCTIONAL, Entry, StoreDB
@@ -181,15 +181,16 @@ class SpaceState:
         self._plain_subjects.update(row[0] for row in new)
         return new
 
-    def install(self, payload: bytes) -> Net:
-        """Take a leader's published net changeset exactly as given (a follower store).
+    def install(self, wire: dict, payload: bytes) -> Net:
+        """Take a committed net changeset exactly as given (`wire`, `payload` its encoding).
+
+        The overlay is not touched: nothing is decided on it before the batch it
+        is applied in is committed and `settle` is called.
 
         Raises:
             MalformedPayload: not a published changeset.
         """
-        wire = unpack(payload)
         seq = published_seq(wire)
-        assert isinstance(wire, dict)
         lists = [[oxterms.triple(t) for t in wire.get(name) or ()] for name in LISTS]
         added, removed, i_added, i_removed = lists
         prefixes = self.prefixes.update(wire.get("prefixes") or {})
@@ -204,8 +205,6 @@ class SpaceState:
             inferred_added=i_added,
             prefixes=prefixes,
         )
-        self._net("t", removed, added)
-        self._net("i", i_removed, i_added)
         self._stamp(entry, str(wire.get("ts") or ""))
         self.seq = seq
         texts = [[oxterms.triple_text(t) for t in ts] for ts in lists]
