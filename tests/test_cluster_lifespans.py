@@ -4,7 +4,8 @@ Each replica runs its own Zenoh router: what one learns of another's writes and
 expiries came through etcd. A leased write expires on every replica in one
 changeset of the log, decided once whichever replicas swept it; a renewal on
 another replica keeps it alive; when the replica that committed the write is
-killed -9, another expires it, and the killed one agrees once restarted.
+killed -9, another expires it, and the killed one agrees once restarted; leases outlive a
+kill -9 of every replica (one due during the outage is retracted at restart, once).
 """
 
 from __future__ import annotations
