@@ -10,10 +10,12 @@ kill -9 of every replica (one due during the outage is retracted at restart, onc
 
 from __future__ import annotations
 
+import asyncio
 import signal
 import time
 
 from rdflib import Literal, URIRef
+from test_cluster_store import _compact_all
 
 from conftest import Server, wait_for
 from space import TripleSpace
@@ -132,3 +134,25 @@ def test_leases_outlive_a_kill_of_every_replica(replicas: list[Server]) -> None:
         wait_for(lambda r=r: not _holds(r, "durable", soon), 15, f"the expiry on {r.endpoint}")
         assert _holds(r, "durable", later)
         assert [e.removed for e in _expiries(r, "durable")] == [[soon]]
+
+
+def test_a_relisted_replica_never_expires_a_lease_renewed_while_it_was_away(
+    replicas: list[Server], etcd_cluster
+) -> None:
+    reading = (URIRef(EX + "robot3_battery"), URIRef(EX + "level"), Literal("low"))
+    with _open(replicas[1], "relist") as b:
+        b.write([reading], lifespan=3.0)  # B holds this lease, on disk
+    first_due = time.monotonic() + 3.0
+    replicas[1].stop(signal.SIGKILL)
+    with _open(replicas[0], "relist") as a:
+        a.write([reading], lifespan=60.0)  # renewed while B is away
+    # as if B had been away longer than etcd keeps the log: it re-lists, its old lease is stale
+    asyncio.run(_compact_all(etcd_cluster.endpoints))
+    replicas[1].start()
+    wait_for(lambda: "re-listed every space" in replicas[1].logs(), 30, "the re-list")
+    wait_for(lambda: time.monotonic() > first_due + 2.0, 10, "the stale lease's time and grace")
+    for r in replicas:  # B did not sweep its stale lease: the renewal holds everywhere
+        assert _holds(r, "relist", reading)
+        assert _expiries(r, "relist") == []
+    with _open(replicas[2], "relist") as c:
+        assert 50 < dict(c.lifespans((reading[0], None, None)))[reading] <= 60
