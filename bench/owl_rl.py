@@ -2,8 +2,9 @@
 
 For each size, a LUBM-like data set (bench/lubm.py) is loaded and
 materialised by each system in a fresh process (so peak memory is its own):
-  ours          read_triples (Oxigraph's parser) + RuleEngine.load
-  ours-rdflib   the code before: rdflib's parser (read_graph) + RuleEngine.load
+  ours          RuleEngine.load_files: Oxigraph's parser into ids, set-at-a-time closure
+  ours-rdflib   rdflib's parser (read_graph) + RuleEngine.load (--systems; slow to parse)
+  main          --old DIR: the code of another checkout (its own bench's `ours`)
   reasonable    reasonable 0.4.4 (Rust): load_file + reason()
   owlrl         owlrl's DeductiveClosure on an rdflib Graph (--owlrl; up to 20k triples)
 then ours times single-triple deletes and adds (each a data triple taken out
@@ -12,7 +13,7 @@ Runs alternate between systems so machine noise falls on all alike; the
 table gives medians over --repeat runs. Writes a Markdown table and a PNG.
 
     python bench/owl_rl.py --departments 43 --repeat 3 --png /tmp/owl_rl.png
-    python bench/owl_rl.py --departments 43 425 --repeat 1
+    python bench/owl_rl.py --departments 43 425 --repeat 1 --old /path/to/main
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench.lubm import write
 
 SYSTEMS = ("ours", "ours-rdflib", "reasonable")
+DEFAULT = ("ours", "reasonable")
 OWLRL_MAX = 20_000  # owlrl takes half a minute at 5k triples, and grows faster than linearly
 
 
@@ -52,6 +54,7 @@ def child(system: str, folder: Path, updates: int) -> dict:
         result["triples"] = len(r.reason())
         result["load_s"] = time.perf_counter() - start
         result["cpu_s"] = _cpu() - cpu0  # every thread's: fair on a loaded machine
+        result["peak_mb"] = _peak_mb()
         if updates:
             result.update(_reasonable_updates(r, updates))
     elif system == "owlrl":
@@ -66,20 +69,28 @@ def child(system: str, folder: Path, updates: int) -> dict:
         result["load_s"] = time.perf_counter() - start
         result["cpu_s"] = _cpu() - cpu0  # every thread's: fair on a loaded machine
     else:
-        from space.reasoning import RuleEngine, read_graph, read_triples
+        from space.reasoning import RuleEngine, read_graph
 
         warnings.simplefilter("ignore")
-        triples = read_triples([data]) if system == "ours" else read_graph([data])
         engine = RuleEngine([], read_graph([ontology]))
-        engine.load(triples)
+        if system == "ours":
+            engine.load_files([data])
+        else:
+            engine.load(read_graph([data]))
         result["triples"] = engine.count()
         result["load_s"] = time.perf_counter() - start
         result["cpu_s"] = _cpu() - cpu0  # every thread's: fair on a loaded machine
+        result["peak_mb"] = _peak_mb()
         if updates and system == "ours":
-            result.update(_our_updates(engine, list(triples), updates))
-    usage = resource.getrusage(resource.RUSAGE_SELF)
-    result["peak_mb"] = usage.ru_maxrss / 1024
+            from space.reasoning import read_triples
+
+            result.update(_our_updates(engine, read_triples([data]), updates))
+    result.setdefault("peak_mb", _peak_mb())
     return result
+
+
+def _peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 def _cpu() -> float:
@@ -137,14 +148,15 @@ def _p50(values: list[float]) -> float:
     return statistics.median(values) * 1000
 
 
-def run(system: str, folder: Path, updates: int) -> dict:
-    """Run one system in a fresh process; return its result."""
+def run(system: str, folder: Path, updates: int, old: Path | None = None) -> dict:
+    """Run one system in a fresh process; return its result (`main`: the bench of `old`)."""
+    script = old / "bench" / "owl_rl.py" if system == "main" and old else Path(__file__)
     out = subprocess.run(
         [
             sys.executable,
-            __file__,
+            str(script),
             "--child",
-            system,
+            "ours" if system == "main" else system,
             "--dir",
             str(folder),
             "--updates",
@@ -165,8 +177,9 @@ def main() -> None:
     parser.add_argument("--reasonable-updates", type=int, default=3)
     parser.add_argument("--owlrl", action="store_true", help="add owlrl (slow: small sizes)")
     parser.add_argument(
-        "--systems", nargs="+", choices=SYSTEMS, default=list(SYSTEMS), help="default: all three"
+        "--systems", nargs="+", choices=SYSTEMS, default=list(DEFAULT), help="default: %(default)s"
     )
+    parser.add_argument("--old", type=Path, help="a checkout whose code runs beside, as `main`")
     parser.add_argument("--png", type=Path, default=Path("owl_rl.png"))
     parser.add_argument("--child", help=argparse.SUPPRESS)
     parser.add_argument("--dir", type=Path, help=argparse.SUPPRESS)
@@ -175,6 +188,8 @@ def main() -> None:
         print(json.dumps(child(args.child, args.dir, args.updates)))
         return
     systems = [*args.systems, "owlrl"] if args.owlrl else list(args.systems)
+    if args.old:
+        systems.insert(1, "main")
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for departments in args.departments:
@@ -187,11 +202,11 @@ def main() -> None:
             for i in range(args.repeat):
                 for system in here:
                     updates = 0
-                    if i == 0 and system == "ours":
+                    if i == 0 and system in ("ours", "main"):
                         updates = args.updates
                     elif i == 0 and system == "reasonable":
                         updates = args.reasonable_updates
-                    results[system].append(run(system, folder, updates))
+                    results[system].append(run(system, folder, updates, args.old))
                     print(f"{size} {system} run {i}: {results[system][-1]}", file=sys.stderr)
             rows.append((size, results))
     table = _table(rows)
@@ -208,14 +223,21 @@ def _median(runs: list[dict], key: str) -> float | None:
 def _table(rows: list) -> str:
     lines = [
         "| data triples | system | closure | load+materialise s | CPU s | peak MB "
-        "| delete p50 ms | add p50 ms |",
-        "|---:|---|---:|---:|---:|---:|---:|---:|",
+        "| CPU, peak vs reasonable | delete p50 ms | add p50 ms |",
+        "|---:|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for size, results in rows:
+        peer = results.get("reasonable")
         for system, runs in results.items():
-            keys = ("load_s", "cpu_s", "peak_mb", "delete_p50_ms", "add_p50_ms")
-            cells = [_median(runs, k) for k in keys]
+            cells = [_median(runs, k) for k in ("load_s", "cpu_s", "peak_mb")]
             shown = ["-" if c is None else f"{c:,.2f}" for c in cells]
+            ratio = "-"
+            if peer and system != "reasonable":
+                cpu, peak = (_median(runs, k) / _median(peer, k) for k in ("cpu_s", "peak_mb"))
+                ratio = f"{cpu:.2f}x, {peak:.2f}x"
+            shown.append(ratio)
+            updates = [_median(runs, k) for k in ("delete_p50_ms", "add_p50_ms")]
+            shown += ["-" if c is None else f"{c:,.2f}" for c in updates]
             lines.append(
                 f"| {size:,} | {system} | {runs[0]['triples']:,} | " + " | ".join(shown) + " |"
             )
@@ -230,7 +252,7 @@ def _plot(rows: list, path: Path) -> None:
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for ax, key, label in (
-        (axes[0], "load_s", "load + materialise (s)"),
+        (axes[0], "cpu_s", "load + materialise (CPU s)"),
         (axes[1], "peak_mb", "peak memory (MB)"),
     ):
         width = 0.8 / len(rows[0][1])

@@ -3,13 +3,15 @@
 rdflib's parsers cost most of a large load (25 s of 89 at a million
 triples); Oxigraph's parse the same files in a fraction of that. The engine
 holds rdflib terms at its edge, so each distinct Oxigraph term becomes an
-rdflib term once, and a triple costs three dictionary lookups.
+rdflib term (or, read for an engine, its integer id) once, and a triple costs
+three dictionary lookups.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
+from typing import TypeVar
 
 import pyoxigraph as ox
 from rdflib import XSD, BNode, Literal, URIRef
@@ -17,7 +19,11 @@ from rdflib.term import Node
 
 from space.errors import InputError
 from space.reasoning.errors import unreadable
+from space.reasoning.terms import TermTable
+from space.reasoning.triples import T
 from space.terms import Triple
+
+V = TypeVar("V")
 
 _FORMATS = {
     ".nt": ox.RdfFormat.N_TRIPLES,
@@ -43,8 +49,23 @@ def read_triples(paths: Iterable[str | Path]) -> list[Triple]:
         InputError: a file is missing or malformed (the message names it, with
             Oxigraph's line and column).
     """
-    cache: dict[object, Node] = {}
-    out: list[Triple] = []
+    return _read(paths, _term)
+
+
+def read_ids(paths: Iterable[str | Path], terms: TermTable) -> list[T]:
+    """Read RDF files as `read_triples` does, straight into the ids of `terms` (an engine's).
+
+    Raises:
+        InputError: as `read_triples`.
+    """
+    term_id = terms.id
+    return _read(paths, lambda term, path: term_id(_term(term, path)))
+
+
+def _read(paths: Iterable[str | Path], convert: Callable[[object, str | Path], V]) -> list:
+    """Parse files into triples of converted terms, converting each distinct term once."""
+    cache: dict[object, V] = {}
+    out: list[tuple[V, V, V]] = []
     append = out.append
     for path in paths:
         fmt = _FORMATS.get(Path(path).suffix.lower(), ox.RdfFormat.TURTLE)
@@ -54,11 +75,11 @@ def read_triples(paths: Iterable[str | Path]) -> list[Triple]:
                 s, p, o = quad.subject, quad.predicate, quad.object
                 s2, p2, o2 = cache.get(s), cache.get(p), cache.get(o)
                 if s2 is None:
-                    s2 = cache[s] = _term(s, path)
+                    s2 = cache[s] = convert(s, path)
                 if p2 is None:
-                    p2 = cache[p] = _term(p, path)
+                    p2 = cache[p] = convert(p, path)
                 if o2 is None:
-                    o2 = cache[o] = _term(o, path)
+                    o2 = cache[o] = convert(o, path)
                 append((s2, p2, o2))
         except OSError as exc:
             raise InputError(unreadable(path, exc)) from exc

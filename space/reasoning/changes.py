@@ -29,6 +29,7 @@ class ChangeLog:
         self._asserted = asserted
         self._before: dict[T, tuple[bool, bool]] = {}
         self._expected: dict[T, bool] = {}
+        self._fresh: list[T] = []  # a fresh load's triples, noted in `_before` when read
         self.journal: list[JournalEntry] = []
 
     def begin(self, added: list[T], removed: list[T]) -> None:
@@ -38,6 +39,7 @@ class ChangeLog:
         young generation, which an update growing new ones of 2N entries made every
         collection during it walk again (the cost per firing grew with the rules).
         """
+        self._fresh = []
         self._before.clear()
         self.journal.clear()
         self._expected.clear()
@@ -50,16 +52,44 @@ class ChangeLog:
         if t not in before:
             before[t] = _STATES[t in self._triples][t in self._asserted]
 
+    def fresh(self, triples: list[T]) -> Delta:
+        """Return the `delta` of a fresh engine's load of monotonic rules: `triples`, all new.
+
+        As `begin`, the touches and `delta` would give it, in one pass: nothing
+        was present, no rule changed what is asserted. The triples are noted as
+        touched only if `before` or `net` is read (a HybridEngine's next layer):
+        at a million triples that dictionary is 80 MB and a second.
+        """
+        self.begin([], [])
+        self._fresh = triples
+        added: list[TripleChange] = []
+        inferred: list[Triple] = []
+        functors, asserted = self._terms.functors, self._asserted
+        hidden, shown, decode = self._terms.hidden, self._terms.shown, self._terms.triple
+        for t in triples:
+            if t[2] in functors or (hidden and not shown(t)):
+                continue
+            triple = decode(t)
+            if t in asserted:
+                added.append(_new_change(TripleChange, (triple, _ASSERTED)))
+            else:
+                added.append(_new_change(TripleChange, (triple, _INFERRED)))
+                inferred.append(triple)
+        return Delta(added=tuple(added), inferred_added=tuple(inferred))
+
     @property
     def before(self) -> dict[T, tuple[bool, bool]]:
         """Return, for each triple this update touched, (was present, was asserted); read only."""
+        if self._fresh:
+            self._before = dict.fromkeys(self._fresh, (False, False))
+            self._fresh = []
         return self._before
 
     def net(self) -> tuple[list[T], list[T]]:
         """Return the triples (functor-valued ones too) present now and not before, and back."""
-        triples = self._triples
-        added = [t for t, (was, _) in self._before.items() if not was and t in triples]
-        removed = [t for t, (was, _) in self._before.items() if was and t not in triples]
+        triples, before = self._triples, self.before
+        added = [t for t, (was, _) in before.items() if not was and t in triples]
+        removed = [t for t, (was, _) in before.items() if was and t not in triples]
         return added, removed
 
     def delta(self, firings: tuple[Firing, ...]) -> Delta:

@@ -17,8 +17,10 @@ from rdflib import OWL, BNode, Graph, URIRef
 from rdflib.term import Node
 
 from space.errors import InputError
+from space.reasoning import seminaive
 from space.reasoning.agenda import Agenda
 from space.reasoning.builtins import Context, Registry, default_registry
+from space.reasoning.bulk import read_ids
 from space.reasoning.changes import ChangeLog
 from space.reasoning.checks import check_rule, mark_shared_names
 from space.reasoning.compile import CompiledRule, RuleIndex
@@ -122,9 +124,28 @@ class RuleEngine(EngineReads):
             RuleLoopError: production rules did not settle; the state is loaded without
                 their firings (see `apply`).
         """
+        return self._load_ids(lambda: [self._encode(t) for t in triples])
+
+    def load_files(self, paths: Iterable[str | Path]) -> Delta:
+        """`load` RDF files (format from the suffix), read by Oxigraph straight into ids.
+
+        Raises:
+            InputError: a file is missing or malformed.
+            RuleError, RuleLoopError: as `load`.
+        """
+        return self._load_ids(lambda: read_ids(paths, self.terms))
+
+    def _load_ids(self, read: Callable[[], list[T]]) -> Delta:
+        """`load` what `read` encodes, read once the engine is known fresh; semi-naively
+        unless a rule fires match by match (`seminaive.eligible`)."""
         if self._loaded:
             raise RuleError("load() starts a new engine; this one is loaded, use apply()")
-        return self.apply(added=triples)
+        triples = read()
+        if not seminaive.eligible(self):
+            return self._apply_ids(triples, [])
+        delta = seminaive.materialise(self, self._ontology + triples)
+        self._loaded = True
+        return delta
 
     def apply(self, added: Iterable[Triple] = (), removed: Iterable[Triple] = ()) -> Delta:
         """Retract `removed`, assert `added`, run the rules; return the net change.
