@@ -79,6 +79,7 @@ class ClusterSpace(SpaceState):
         super().settle()
         self._flying_stamps.clear()
         for e in self.inflight:
+            # No lookups: an entry's net lists say what it leaves, whatever the database holds.
             self._intend("t", e.removed, e.added)
             self._intend("i", e.inferred_removed, e.inferred_added)
             for s, p, lit in e.stamps_added:
