@@ -36,8 +36,10 @@ def test_answers_acknowledged_after_the_timeout_are_not_replaced_by_a_resync(
             lambda: answered >= set(markers),
             120,
             "an answer naming each change the rules answer",
-            lambda: f"{len(set(markers) - answered)} of {len(markers)} unanswered\n"
-            + agent.logs()[-3000:],
+            lambda: (
+                f"{len(set(markers) - answered)} of {len(markers)} unanswered\n"
+                + agent.logs()[-3000:]
+            ),
         )
     finally:
         ts.unsubscribe(sub)
