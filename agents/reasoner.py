@@ -43,6 +43,7 @@ from space import (
     Explanation,
     Pending,
     SpaceError,
+    SpaceTimeout,
     Subscription,
     Template,
     Triple,
@@ -88,7 +89,7 @@ class Reasoner(Agent):
         self._others: zenoh.Subscriber | None = None
         self._joined: zenoh.LivelinessToken | None = None
         self.knowledge = Knowledge(args.rules, args.ontology)
-        self._unacked: deque[tuple[str | None, Pending]] = deque()
+        self._unacked: deque[tuple[Changeset, Pending]] = deque()
         self._ledger = Ledger()
         self._diverged = False  # an answer was not taken, and no resync has succeeded since
         self._loaded_seq = 0
@@ -329,7 +330,7 @@ class Reasoner(Agent):
         if wait:
             self.ts.send(cs, timeout=self.args.timeout)
             return
-        self._unacked.append((cause, self.ts.send_later(cs, timeout=self.args.timeout)))
+        self._unacked.append((cs, self.ts.send_later(cs, timeout=self.args.timeout)))
         if len(self._unacked) > IN_FLIGHT:
             self._settle(len(self._unacked) - IN_FLIGHT)
 
@@ -341,11 +342,11 @@ class Reasoner(Agent):
         """
         lost = False
         while self._unacked and (count is None or count > 0):
-            cause, pending = self._unacked.popleft()
+            cs, pending = self._unacked.popleft()
             try:
-                pending.result()
+                self._acknowledged(cs, pending)
             except SpaceError as exc:
-                self.log.warning("answer to change %s not taken: %s", cause, exc)
+                self.log.warning("answer to change %s not taken: %s", cs.cause, exc)
                 lost = True
             if count is not None:
                 count -= 1
@@ -353,6 +354,30 @@ class Reasoner(Agent):
             self._settle()
             self._diverged = True
             self._resync()
+
+    def _acknowledged(self, cs: Changeset, pending: Pending) -> None:
+        """Wait for an answer's acknowledgement, sending it again while the store is only slow.
+
+        A store that answers later than `--timeout` (a backlog of writes ahead of the
+        answer) still applies the answer it holds. Taking that for a refusal made the
+        reasoner rebuild its engine and skip every change the space then held: those
+        changes got one answer naming none of them, seconds late (bench/fleet.py at
+        2,000 changesets/s). The same changeset again (its id) is safe: a store answers
+        a retried id with the first one's outcome. Stopping ends the wait.
+
+        Raises:
+            SpaceError: the store refused it, or none answered, or the agent is stopping.
+        """
+        assert self.ts is not None
+        while True:
+            try:
+                pending.result()
+                return
+            except SpaceTimeout:
+                if self._stop.is_set():
+                    raise
+                self.log.warning("answer to change %s not acknowledged yet: sent again", cs.cause)
+                pending = self.ts.send_later(cs, timeout=self.args.timeout)
 
     def _robot_of(self, firing: Firing, robots: dict[Node, bool]) -> Node:
         """Return the robot a firing concerned: the first robot among its premises, else `--robot`.
