@@ -28,6 +28,7 @@ from space.reasoning import (
     read_triples,
     seminaive,
 )
+from space.reasoning.support import each
 
 ROOT = Path(__file__).resolve().parents[1]
 EX = Namespace("http://example.org/")
@@ -45,11 +46,11 @@ def state(engine: RuleEngine) -> tuple:
     """The engine's whole state, decoded (ids may differ between two engines)."""
     decode = engine.terms.triple
     derivations = {
-        decode(t): {(r, tuple(map(decode, p))) for r, p in found}
+        decode(t): {(r, tuple(map(decode, p))) for r, p in each(found)}
         for t, found in engine._support.derivations.items()
     }
     dependents = {
-        decode(t): set(map(decode, users))
+        decode(t): set(map(decode, each(users)))
         for t, users in engine._support.dependents.items()
         if users
     }

@@ -5,43 +5,75 @@ Every derivation (rule, premises) is kept, so deletion is delete-and-rederive
 derive, then put back whatever still has a derivation whose premises all stand,
 starting from the triples that were never touched. This is right for recursive
 rules (transitivity, sameAs) where counting alone would keep cycles alive.
+
+Most triples have one derivation and most premises support one triple, so
+each is held bare and becomes a set only at its second (a set of one is 216
+bytes: at 100k triples, a third of the engine's memory). `each` reads both.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Hashable, Sequence
+from typing import TypeVar
 
 from space.reasoning.triples import T, TripleStore
 
 Derivation = tuple[int, tuple[T, ...]]
+Item = TypeVar("Item", bound=Hashable)
+
+
+def each(held: Item | set[Item] | None) -> Collection[Item]:
+    """Return what one entry holds as a collection: a set as is, a bare item as a 1-tuple."""
+    if held is None:
+        return ()
+    return held if type(held) is set else (held,)  # type: ignore[return-value]
+
+
+def add(mapping: dict[T, Item | set[Item]], key: T, item: Item) -> None:
+    """Add `item` to `key`'s entry: bare if it is the first, a set from the second."""
+    held = mapping.get(key)
+    if held is None:
+        mapping[key] = item
+    elif type(held) is set:
+        held.add(item)
+    elif held != item:
+        mapping[key] = {held, item}  # type: ignore[assignment]
+
+
+def discard(mapping: dict[T, Item | set[Item]], key: T, item: Item) -> None:
+    """Take `item` out of `key`'s entry; an entry left empty goes."""
+    held = mapping.get(key)
+    if held is None:
+        return
+    if type(held) is set:
+        held.discard(item)
+        if not held:
+            del mapping[key]
+    elif held == item:
+        del mapping[key]
 
 
 class Support:
-    """Hold the derivations of triples and which triples each premise supports."""
+    """Hold the derivations of triples and which triples each premise supports.
+
+    Each entry is bare (one) or a set (two or more): read it with `each`.
+    """
 
     def __init__(self) -> None:
-        self.derivations: dict[T, set[Derivation]] = {}
-        self.dependents: dict[T, set[T]] = {}
+        self.derivations: dict[T, Derivation | set[Derivation]] = {}
+        self.dependents: dict[T, T | set[T]] = {}
 
     def record(self, triple: T, rule: int, premises: tuple[T, ...]) -> None:
         """Remember that `rule` derived `triple` from `premises` (again is harmless)."""
-        found = self.derivations.get(triple)
-        if found is None:
-            self.derivations[triple] = {(rule, premises)}
-        else:
-            found.add((rule, premises))
+        add(self.derivations, triple, (rule, premises))
         dependents = self.dependents
         for premise in premises:
-            users = dependents.get(premise)
-            if users is None:
-                dependents[premise] = {triple}
-            else:
-                users.add(triple)
+            add(dependents, premise, triple)
 
     def first(self, triple: T) -> Derivation | None:
         """Return one derivation of a triple (the smallest, for a stable answer), or None."""
         found = self.derivations.get(triple)
-        return min(found) if found else None
+        return min(found) if type(found) is set else found  # type: ignore[return-value]
 
     def retract(
         self,
@@ -61,7 +93,7 @@ class Support:
             (only,) = doomed
             if only not in triples:
                 return []
-            if not self.dependents.get(only):
+            if only not in self.dependents:
                 return self._retract_leaf(only, store)
         stack = [t for t in doomed if t in triples]
         over: dict[T, None] = {}
@@ -70,7 +102,7 @@ class Support:
             if triple in over or triple in asserted:
                 continue
             over[triple] = None
-            stack.extend(self.dependents.get(triple, ()))
+            stack.extend(each(self.dependents.get(triple)))
         for triple in over:
             touch(triple)
             store.remove(triple)
@@ -84,7 +116,7 @@ class Support:
 
         What `_forget` does for it, inlined: it has no dependents to walk.
         """
-        found = self.derivations.get(triple)
+        found = each(self.derivations.get(triple))
         if found:
             triples = store.triples
             if any(triples.issuperset(p) for _, p in found):
@@ -93,10 +125,7 @@ class Support:
             dependents = self.dependents
             for _, premises in found:
                 for premise in premises:
-                    users = dependents.get(premise)
-                    if users is not None:
-                        users.discard(triple)
-        self.dependents.pop(triple, None)  # an empty set, if any
+                    discard(dependents, premise, triple)
         store.remove(triple)  # no touch: the caller touched the doomed
         return [triple]
 
@@ -108,27 +137,23 @@ class Support:
             triple = queue.pop()
             if triple in triples:
                 continue
-            for _, premises in self.derivations.get(triple, ()):
+            for _, premises in each(self.derivations.get(triple)):
                 if all(p in triples for p in premises):
                     store.add(triple)
-                    queue.extend(d for d in self.dependents.get(triple, ()) if d in over)
+                    queue.extend(d for d in each(self.dependents.get(triple)) if d in over)
                     break
 
     def _forget(self, gone: list[T]) -> None:
         """Drop the derivations of gone triples and those that used them."""
         gone_set = set(gone)
+        derivations, dependents = self.derivations, self.dependents
         for triple in gone:
-            for _, premises in self.derivations.pop(triple, ()):
+            for _, premises in each(derivations.pop(triple, None)):
                 for premise in premises:
-                    users = self.dependents.get(premise)
-                    if users is not None:
-                        users.discard(triple)
+                    discard(dependents, premise, triple)
         for triple in gone:
-            for user in self.dependents.pop(triple, ()):
+            for user in each(dependents.pop(triple, None)):
                 if user in gone_set:
                     continue
-                found = self.derivations.get(user)
-                if found:
-                    found.difference_update([d for d in found if triple in d[1]])
-                    if not found:
-                        del self.derivations[user]
+                for d in [d for d in each(derivations.get(user)) if triple in d[1]]:
+                    discard(derivations, user, d)
