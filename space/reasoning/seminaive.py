@@ -27,8 +27,8 @@ from typing import TYPE_CHECKING
 from space.reasoning.delta import Delta
 from space.reasoning.joins import Match
 from space.reasoning.rules import Pattern
-from space.reasoning.support import Derivation
-from space.reasoning.triples import T, _put
+from space.reasoning.support import Derivation, Entry
+from space.reasoning.triples import SMALL, T, _put
 
 if TYPE_CHECKING:
     from space.reasoning.engine import RuleEngine
@@ -76,8 +76,8 @@ def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
     """
     store, asserted = engine._store, engine._asserted
     triples, spo, pos, osp = store.triples, store.spo, store.pos, store.osp
-    derivations: dict[T, Derivation | set[Derivation]] = engine._support.derivations
-    dependents: dict[T, T | set[T]] = engine._support.dependents
+    derivations: dict[T, Entry[Derivation]] = engine._support.derivations
+    dependents: dict[T, Entry[T]] = engine._support.dependents
     starts = engine._index.starts
     # Each triple as the one object the store holds: derivations then share it,
     # not a copy per premise a join built (a third of the load's memory).
@@ -118,8 +118,8 @@ def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
 
 def _recorders(
     engine: RuleEngine,
-    derivations: dict[T, Derivation | set[Derivation]],
-    dependents: dict[T, T | set[T]],
+    derivations: dict[T, Entry[Derivation]],
+    dependents: dict[T, Entry[T]],
     canon: dict[T, T],
     fresh: dict[T, T],
 ) -> dict[int, Callable[[list[Match]], None]]:
@@ -133,6 +133,7 @@ def _recorders(
         "DEP": dependents,
         "CANON": canon,
         "FRESH": fresh,
+        "SMALL": SMALL,
     }
     recorders = {}
     for compiled in engine._compiled:
@@ -165,10 +166,17 @@ def _add(mapping: str, key: str, item: str) -> list[str]:
         f"        held = {mapping}.get({key})",
         "        if held is None:",
         f"            {mapping}[{key}] = {item}",
-        "        elif type(held) is set:",
+        "        elif type(held) is tuple:",
+        f"            if held != {item}:",
+        f"                {mapping}[{key}] = [held, {item}]",
+        "        elif type(held) is list:",
+        f"            if {item} not in held:",
+        "                if len(held) < SMALL:",
+        f"                    held.append({item})",
+        "                else:",
+        f"                    {mapping}[{key}] = {{*held, {item}}}",
+        "        else:",
         f"            held.add({item})",
-        f"        elif held != {item}:",
-        f"            {mapping}[{key}] = {{held, {item}}}",
     ]
 
 

@@ -7,8 +7,9 @@ starting from the triples that were never touched. This is right for recursive
 rules (transitivity, sameAs) where counting alone would keep cycles alive.
 
 Most triples have one derivation and most premises support one triple, so
-each is held bare and becomes a set only at its second (a set of one is 216
-bytes: at 100k triples, a third of the engine's memory). `each` reads both.
+an entry is held bare while it is one, a list up to `SMALL`, a set beyond
+(a set of one is 216 bytes: at 100k triples it was a third of the engine's
+memory). `each` reads all three.
 """
 
 from __future__ import annotations
@@ -16,52 +17,65 @@ from __future__ import annotations
 from collections.abc import Callable, Collection, Hashable, Sequence
 from typing import TypeVar
 
-from space.reasoning.triples import T, TripleStore
+from space.reasoning.triples import SMALL, T, TripleStore
 
 Derivation = tuple[int, tuple[T, ...]]
-Item = TypeVar("Item", bound=Hashable)
+Item = TypeVar("Item", bound=Hashable)  # a tuple: a Derivation or a triple
+Entry = Item | list[Item] | set[Item]
 
 
-def each(held: Item | set[Item] | None) -> Collection[Item]:
-    """Return what one entry holds as a collection: a set as is, a bare item as a 1-tuple."""
+def each(held: Entry[Item] | None) -> Collection[Item]:
+    """Return what one entry holds as a collection (a bare item as a 1-tuple)."""
     if held is None:
         return ()
-    return held if type(held) is set else (held,)  # type: ignore[return-value]
+    return (held,) if type(held) is tuple else held  # type: ignore[return-value]
 
 
-def add(mapping: dict[T, Item | set[Item]], key: T, item: Item) -> None:
-    """Add `item` to `key`'s entry: bare if it is the first, a set from the second."""
+def add(mapping: dict[T, Entry[Item]], key: T, item: Item) -> None:
+    """Add `item` to `key`'s entry (again is harmless)."""
     held = mapping.get(key)
     if held is None:
         mapping[key] = item
-    elif type(held) is set:
-        held.add(item)
-    elif held != item:
-        mapping[key] = {held, item}  # type: ignore[assignment]
+    elif type(held) is tuple:
+        if held != item:
+            mapping[key] = [held, item]
+    elif type(held) is list:
+        if item not in held:
+            if len(held) < SMALL:
+                held.append(item)
+            else:
+                mapping[key] = {*held, item}
+    else:
+        held.add(item)  # type: ignore[union-attr]
 
 
-def discard(mapping: dict[T, Item | set[Item]], key: T, item: Item) -> None:
+def discard(mapping: dict[T, Entry[Item]], key: T, item: Item) -> None:
     """Take `item` out of `key`'s entry; an entry left empty goes."""
     held = mapping.get(key)
     if held is None:
         return
-    if type(held) is set:
-        held.discard(item)
-        if not held:
+    if type(held) is tuple:
+        if held == item:
             del mapping[key]
-    elif held == item:
+        return
+    if type(held) is list:
+        if item in held:
+            held.remove(item)
+    else:
+        held.discard(item)  # type: ignore[union-attr]
+    if not held:
         del mapping[key]
 
 
 class Support:
     """Hold the derivations of triples and which triples each premise supports.
 
-    Each entry is bare (one) or a set (two or more): read it with `each`.
+    Each entry is bare, a list or a set (see the module's docstring): read it with `each`.
     """
 
     def __init__(self) -> None:
-        self.derivations: dict[T, Derivation | set[Derivation]] = {}
-        self.dependents: dict[T, T | set[T]] = {}
+        self.derivations: dict[T, Entry[Derivation]] = {}
+        self.dependents: dict[T, Entry[T]] = {}
 
     def record(self, triple: T, rule: int, premises: tuple[T, ...]) -> None:
         """Remember that `rule` derived `triple` from `premises` (again is harmless)."""
@@ -73,7 +87,7 @@ class Support:
     def first(self, triple: T) -> Derivation | None:
         """Return one derivation of a triple (the smallest, for a stable answer), or None."""
         found = self.derivations.get(triple)
-        return min(found) if type(found) is set else found  # type: ignore[return-value]
+        return min(each(found)) if found else None
 
     def retract(
         self,
