@@ -18,6 +18,10 @@ One store (`tspace serve` on a fresh data dir) per run. Measures, in one run:
 4. memory per leased triple: the store's RSS growth for 100,000 leased triples
    minus that for 100,000 permanent ones, and the in-memory index alone (tracemalloc).
 
+`--cluster`: instead, the expiry lateness of the same probes on three `tspace serve
+--cluster` replicas of a 3-member etcd cluster on this machine (each expiry committed through
+etcd once, docs/lifespans.md), probes written to and watched on one replica, per run.
+
 Objects are IRIs, not numbers: the store's canonical form of a typed literal
 (`oxterms._canonical`) costs more with every distinct literal seen (10 ms each
 after 20,000; reported to the store's owner), which would swamp what is measured here.
@@ -27,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import tempfile
 import threading
 import time
 import tracemalloc
@@ -203,6 +208,26 @@ def mass_table(
     )
 
 
+def cluster_lateness(runs: int, probes: int) -> str:
+    """Print the expiry lateness on three replicas (fresh etcd and replicas per run)."""
+    from _cluster_store import replicas
+
+    from space.store.etcd_member import LocalCluster
+
+    rows = []
+    for _ in range(runs):
+        with tempfile.TemporaryDirectory() as work, LocalCluster(Path(work) / "etcd") as cluster:
+            with replicas(cluster, Path(work)) as (endpoints, _pids):
+                with TripleSpace.open(endpoints[0], space="bench") as ts:
+                    late = lateness(ts, probes)
+        rows.append((len(late), percentile(late, 50), percentile(late, 99), max(late)))
+    return print_table(
+        f"expiry lateness on 3 cluster replicas, ms ({probes} probes a run)",
+        ["expired", "p50", "p99", "max"],
+        rows,
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--rounds", type=int, default=3)
@@ -218,7 +243,14 @@ def main() -> None:
     )
     parser.add_argument("--mass-runs", type=int, default=3, help="runs of each mass expiry")
     parser.add_argument("--old", type=Path, help="a source tree of the code before")
+    parser.add_argument(
+        "--cluster", type=int, default=0, help="runs of the expiry lateness on 3 replicas only"
+    )
     args = parser.parse_args()
+    if args.cluster:
+        OUT.mkdir(exist_ok=True)
+        (OUT / "lifespans-cluster.txt").write_text(cluster_lateness(args.cluster, 200) + "\n")
+        return
     rates: dict[str, list[float]] = {"permanent": [], "lifespan": [], "permanent (before)": []}
     with contextlib.ExitStack() as stack:
         endpoint, pid = stack.enter_context(serve_process())

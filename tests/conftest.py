@@ -182,6 +182,23 @@ def etcd_cluster(tmp_path: Path) -> Iterator[object]:
         yield cluster
 
 
+@pytest.fixture
+def replicas(etcd_cluster, tmp_path: Path) -> Iterator[list[Server]]:
+    """Three replicas of one etcd cluster, each behind its own router."""
+    members = ",".join(etcd_cluster.endpoints)
+    servers = [Server(tmp_path / f"r{i}" / "data", "--cluster", members) for i in range(3)]
+    for s in servers:
+        s.data_dir.parent.mkdir(parents=True)
+        s.start(wait=False)
+    try:
+        for s in servers:
+            wait_for(s.reachable, 30, f"replica on {s.endpoint}", s.logs)
+        yield servers
+    finally:
+        for s in servers:
+            s.stop()
+
+
 async def _until_writable(endpoints: list[str], timeout: float = 20.0) -> None:
     from aetcd import rpc
 

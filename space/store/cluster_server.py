@@ -31,6 +31,7 @@ from space import keys
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload, QueryError, SpaceError
 from space.store.cluster_db import applied_revision, space_seqs
+from space.store.cluster_expiry import ClusterExpiry
 from space.store.cluster_keys import ROOT as ETCD_ROOT
 from space.store.cluster_node import ClusterNode
 from space.store.cluster_state import ClusterSpace
@@ -118,6 +119,7 @@ class ClusterStoreServer(Serving):
             space=self._space,
             publisher=self._publisher,
             max_spaces=self.max_spaces,
+            expiry=ClusterExpiry(self.etcd_root, db),
             guard=self.guard,
         )
         self._writer.revision = revision
@@ -146,12 +148,19 @@ class ClusterStoreServer(Serving):
 
     def _run(self) -> None:
         next_beat = time.monotonic()
+        writer = self._writer
+        assert writer is not None
         while True:
             if time.monotonic() >= next_beat:
                 self._heartbeat()
                 next_beat = time.monotonic() + HEARTBEAT
+            writer.sweep()
+            wait = next_beat - time.monotonic()
+            due = writer.expiry.next_due()
+            if due is not None and not writer.failed:
+                wait = min(wait, due - time.time())
             try:
-                item = self._queue.get(timeout=max(0.0, next_beat - time.monotonic()))
+                item = self._queue.get(timeout=max(0.0, wait))
             except queue.Empty:
                 continue
             batch = [item]

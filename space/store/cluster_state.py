@@ -79,23 +79,11 @@ class ClusterSpace(SpaceState):
         super().settle()
         self._flying_stamps.clear()
         for e in self.inflight:
+            # No lookups: an entry's net lists say what it leaves, whatever the database holds.
             self._intend("t", e.removed, e.added)
             self._intend("i", e.inferred_removed, e.inferred_added)
             for s, p, lit in e.stamps_added:
                 self._flying_stamps[(s, p)] = lit.value
-
-    def _intend(self, which: str, removed: list, added: list) -> None:
-        """Note in the overlay the state an entry in flight leaves, as its net lists say.
-
-        No lookups: a triple it removes is absent afterwards, one it adds present,
-        whatever the database holds now, which is what `_net` would conclude.
-        """
-        for t in removed:
-            self._overlay[(which, t)] = False
-        for t in added:
-            self._overlay[(which, t)] = True
-            if which == "t":
-                self._pending_objects.setdefault((t[0], t[1]), set()).add(t[2])
 
     def landed(self, entry: Entry) -> None:
         """Forget an entry of ours once applied (settle afterwards)."""

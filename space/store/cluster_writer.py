@@ -32,6 +32,7 @@ from space import keys
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload, SpaceError, WriteConflict
 from space.store import intake
+from space.store.cluster_expiry import ClusterExpiry
 from space.store.cluster_flights import Flight, chain, committed, guarded_entry
 from space.store.cluster_node import ClusterNode, Done
 from space.store.cluster_state import ClusterSpace
@@ -45,10 +46,6 @@ from space.store.writer import Request, SpaceLimit, answer, decide, reject
 log = logging.getLogger("tspace.store")
 
 MAX_ATTEMPTS = 20  # decisions of one request before its writer is told it kept conflicting
-
-
-class NotInCluster(SpaceError):
-    """A request asks for what a cluster replica does not do yet (lifespans)."""
 
 
 class ClusterWriter:
@@ -71,9 +68,11 @@ class ClusterWriter:
         space: Callable[[str], ClusterSpace],
         publisher: Publisher,
         max_spaces: int,
+        expiry: ClusterExpiry,
         guard: WriteGuard | None = None,
     ) -> None:
         self.session, self.db, self.node, self.root = session, db, node, root
+        self.expiry = expiry
         self.guard = guard
         self.max_spaces = max_spaces
         self.revision = 0  # the etcd revision applied into the database
@@ -92,17 +91,14 @@ class ClusterWriter:
     def write(self, req: Request, attempt: int = 1) -> None:
         write = intake.write_request(req.payload or b"")
         write.parse_plain()  # decided term by term: in-flight decisions overlay in terms
-        if write.lifespan is not None:
-            raise NotInCluster(
-                "not applied: triples with a lifespan are not supported in cluster mode yet "
-                "(docs/cluster.md); write them without one"
-            )
         state = self._writable(req.space)
         if self._again(req, state.name, write.id):
             return
         self._check(req, write, state)
         stamp = write.ts or str(self.session.new_timestamp())
+        plan = self.expiry.plan(state, write)  # before deciding: what it finds held
         net, dropped = decide(state, write, stamp)
+        net = self.expiry.decided(plan, state, write, net, stamp)
 
         def reply(n: Net | None) -> dict:
             ack: dict = {"id": write.id, "seq": n.entry.seq if n else state.seq}
@@ -114,6 +110,7 @@ class ClusterWriter:
             answer(req, reply(None))
             return
         self._stage(req, state, net, reply, stamp, write.id, attempt, taken=False)
+        self.expiry.amend(self._staged[-1].entry, state.name, net, write, plan, stamp)
 
     def take(self, req: Request, attempt: int = 1) -> None:
         take = intake.query_request(req.payload or b"")
@@ -136,6 +133,7 @@ class ClusterWriter:
             return
         reply = lambda n: {"seq": n.entry.seq, keys.ASSERTED: n.texts[1]}  # noqa: E731
         self._stage(req, state, net, reply, stamp, ident, attempt, taken=True)
+        self.expiry.amend(self._staged[-1].entry, state.name, net)
 
     def _again(self, req: Request, space: str, ident: str, *, take: bool = False) -> bool:
         """Answer a request id already applied (the first outcome), or join one in flight."""
@@ -196,6 +194,21 @@ class ClusterWriter:
         self._by_request[(state.name, ident)] = flight
         self._staged.append(flight)
 
+    def sweep(self) -> None:
+        """Decide and send the expiries due (`cluster_expiry`); worker thread, between batches."""
+        if self.failed:
+            return
+        stamp = lambda: str(self.session.new_timestamp())  # noqa: E731
+        flying = lambda key: key in self._writers  # noqa: E731
+        try:
+            for x in self.expiry.due(self._space, stamp, flying):
+                ask = Request("expire", x.state.name, None)
+                self._stage(ask, x.state, x.net, lambda _n: {}, x.stamp, x.request, 1, taken=False)
+                self.expiry.guard(self._staged[-1].entry, x, self.revision)
+        except Exception:  # a bug must not stop the replica: its writes go on
+            log.exception("replica failed sweeping expired writes")
+        self.flush()
+
     # Committing.
 
     def flush(self) -> None:
@@ -251,8 +264,9 @@ class ClusterWriter:
             return
         self._end(flight)
         flight.state.failed(flight.net.entry)
-        for req in (flight.req, *flight.followers):
-            reject(req, error if isinstance(error, Exception) else SpaceError(str(error)))
+        if not self._expiry_again(flight):
+            for req in (flight.req, *flight.followers):
+                reject(req, error if isinstance(error, Exception) else SpaceError(str(error)))
         for w in flight.waiting:
             self._conflict(w)
 
@@ -264,6 +278,8 @@ class ClusterWriter:
         flight.state.failed(flight.net.entry)
         for w in flight.waiting:
             self._conflict(w)
+        if self._expiry_again(flight):
+            return
         if flight.attempt >= MAX_ATTEMPTS:
             error = SpaceError(
                 f"not applied: {MAX_ATTEMPTS} decisions in a row conflicted; try again"
@@ -273,6 +289,10 @@ class ClusterWriter:
             return
         retry = (flight.req, flight.attempt + 1, flight.followers)
         self.ask_barrier(("redecide", retry))
+
+    def _expiry_again(self, flight: Flight) -> bool:
+        """Leave an expiry not committed to the next sweep; return whether it was one."""
+        return flight.req.kind == "expire" and self.expiry.retry(flight.request)
 
     def ask_barrier(self, item: tuple) -> None:
         """Put `item` back on the worker's queue once this replica applied etcd's revision now.
@@ -336,12 +356,13 @@ class ClusterWriter:
                         continue
                     nets.append((state, net))
                     flight = self._by_payload.get(payload)
+                    self.expiry.applied(state.name, payload, net, ours=flight is not None)
                     if flight is not None:
                         net.entry.dropped = flight.net.entry.dropped
                         ours.append((flight, net))
         last = applied[-1][0]
         try:
-            self.db.commit([n.entry for _, n in nets], revision=last)
+            self.db.commit([n.entry for _, n in nets], self.expiry.changes(), revision=last)
         except CommitFailed as exc:
             self.failed = str(exc)
             log.error("cannot apply revision %d: %s; restart this replica to resume", last, exc)
@@ -378,6 +399,7 @@ class ClusterWriter:
         from space.store.cluster_entries import read_state
 
         revision, pairs, seqs = listing.revision, listing.pairs, listing.seqs  # type: ignore[attr-defined]
+        self.expiry.forget(self.db)
         try:
             replace_all(self.db, read_state(self.root, pairs), seqs, revision)
         except CommitFailed as exc:

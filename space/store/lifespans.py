@@ -16,13 +16,16 @@ After `kill -9`, `load` finds the leases of the triples held (those whose
 time passed during the outage are due at once).
 
 In memory, one group per leasing write (its triples still leased by it) in a
-heap by expiry time; `due` hands the writer thread the groups whose time has
-come, a bounded cost per turn (one write while requests come in), so a mass
-expiry is spread over turns and never holds the writes queued behind it. Each group becomes one
-changeset retracting its triples, attributed to the store, naming the write
-that expired (`cause`). Because the expiry is an ordinary changeset decided
-by the one writer, a replicated log would order it like any other write (see
-docs/lifespans.md).
+heap by expiry time, each triple kept as the texts the database writes: str
+tuples, which the garbage collector leaves out of its walks (it walks
+pyoxigraph terms one by one: with 100,000 leases a full collection took
+0.2-4 s of the writer thread on a loaded machine, the tail of the writes
+during a mass expiry). `due` hands the writer thread the groups whose time
+has come, a bounded cost per turn (one write while requests come in), so a
+mass expiry is spread over turns and never holds the writes queued behind it.
+Each group becomes one changeset retracting its triples, attributed to the
+store, naming the write that expired (`cause`). A cluster replica orders its
+expiries through the replicated log instead (`cluster_expiry.py`).
 
 Writer thread only, except `remaining` (any reader thread).
 """
@@ -44,7 +47,7 @@ import pyoxigraph as ox
 from space.lifespan import EXPIRY_AGENT
 from space.store.db import StoreDB
 from space.store.intake import WriteRequest
-from space.store.oxterms import OxTriple
+from space.store.oxterms import OxTriple, term
 
 if TYPE_CHECKING:
     from space.store.state import Net, SpaceState
@@ -64,6 +67,16 @@ GARBAGE = 256  # a turn of them when no request comes in
 GARBAGE_BUSY = 16  # while requests come in
 
 _Group = tuple[str, float, str]  # space, expiry (unix seconds), write id
+_Text = str  # a triple as the database writes it: `str` of each term, joined by spaces
+
+
+def _text(t: OxTriple) -> _Text:
+    return f"{t[0]} {t[1]} {t[2]}"
+
+
+def _triple(k: _Text) -> OxTriple:
+    s, p, o = k.split(" ", 2)  # a subject and a predicate are IRIs: no space in them
+    return (term(s), term(p), term(o))
 
 
 @lru_cache(maxsize=4096)
@@ -85,16 +98,15 @@ class Leases:
     """Every lease of every space, and the lease quads the next commit must write."""
 
     def __init__(self) -> None:
-        self._held: dict[tuple[str, OxTriple], _Group] = {}
-        self._groups: dict[_Group, set[OxTriple]] = {}
+        self._held: dict[str, dict[_Text, _Group]] = {}  # space -> triple -> its write
+        self._groups: dict[_Group, set[_Text]] = {}
         self._heap: list[tuple[float, int, _Group]] = []
         self._order = itertools.count()
-        self._changes: dict[ox.Quad, bool] = {}  # lease quads to insert (True) or delete
-        self._per_space: dict[str, int] = {}  # leased triples
+        self._changes: dict[tuple[_Group, _Text], bool] = {}  # lease quads: insert (True)
         # Lease quads of triples retracted on expiry, still on disk: deleting them with the
         # retraction would triple its commit, so `collect` deletes them later. A lease quad
         # whose triple is not asserted means nothing (`load` skips it).
-        self.garbage: dict[tuple[str, OxTriple], _Group] = {}
+        self.garbage: dict[tuple[str, _Text], _Group] = {}
         self._garbage_in: dict[str, int] = {}  # space -> how many of `garbage` are its
 
     def has_garbage(self, space: str) -> bool:
@@ -106,7 +118,7 @@ class Leases:
         """
         return self._garbage_in.get(space, 0) > 0
 
-    def _discard(self, space: str, t: OxTriple, group: _Group) -> None:
+    def _discard(self, space: str, t: _Text, group: _Group) -> None:
         """Make a lease quad garbage: its triple is retracted, the quad is still on disk."""
         self.garbage[(space, t)] = group
         self._garbage_in[space] = self._garbage_in.get(space, 0) + 1
@@ -115,11 +127,11 @@ class Leases:
         self._garbage_in[space] -= 1
 
     def __len__(self) -> int:
-        return len(self._held)
+        return sum(map(len, self._held.values()))
 
     def holds(self, space: str) -> bool:
         """Return whether any triple of a space is leased."""
-        return self._per_space.get(space, 0) > 0
+        return bool(self._held.get(space))
 
     def load(self, db: StoreDB) -> None:
         """Forget everything and read the leases from the database (at start, after a failure)."""
@@ -133,11 +145,11 @@ class Leases:
             for q in db.store.quads_for_pattern(None, None, None, g):
                 t = (q.subject, q.predicate, q.object)
                 if db.has(group[0], "t", t):
-                    self._lease(group, t)
+                    self._lease(group, _text(t))
                 else:  # retracted on expiry, its lease quad not collected yet
-                    self._discard(group[0], t, group)
-        if self._held:
-            log.info("%d leased triple(s) in %d write(s)", len(self._held), len(self._groups))
+                    self._discard(group[0], _text(t), group)
+        if self._groups:
+            log.info("%d leased triple(s) in %d write(s)", len(self), len(self._groups))
 
     def decide(
         self,
@@ -146,29 +158,37 @@ class Leases:
         lifespan: float | None,
         asserted: list[OxTriple],
         removed: list[OxTriple],
+        expires: float | None = None,
     ) -> None:
         """Note what a changeset does to leases: `removed` lose theirs, `asserted` get the write's.
 
         `asserted` are the additions applied (held already or not), `removed`
-        the asserted triples it really removes.
+        the asserted triples it really removes. The lease runs until `expires`
+        (unix seconds), by default `lifespan` from now.
         """
+        if not lifespan and not self.holds(space) and not self.has_garbage(space):
+            return  # nothing leased to release, nothing to lease
         for t in removed:
-            self._release(space, t)
-        group = (space, time.time() + lifespan, request) if lifespan else None
-        for t in asserted:
+            self._release(space, _text(t))
+        if lifespan and expires is None:
+            expires = time.time() + lifespan
+        group = (space, expires, request) if expires is not None else None
+        for t in map(_text, asserted):
             self._release(space, t)
             stale = self.garbage.pop((space, t), None)
             if stale is not None:  # asserted again: its old lease quad goes in this commit
-                self._changes[_quad(stale, t)] = False
+                self._changes[(stale, t)] = False
                 self._collected(space)
             if group is not None:
                 self._lease(group, t)
-                self._changes[_quad(group, t)] = True
+                self._changes[(group, t)] = True
 
     def take_changes(self) -> tuple[list[ox.Quad], list[ox.Quad]]:
         """Return the lease quads to delete and to insert with the next commit, and forget them."""
         changes, self._changes = self._changes, {}
-        return [q for q, v in changes.items() if not v], [q for q, v in changes.items() if v]
+        return [_quad(*k) for k, v in changes.items() if not v], [
+            _quad(*k) for k, v in changes.items() if v
+        ]
 
     def next_due(self) -> float | None:
         """Return the earliest expiry time still to sweep (unix seconds), if any."""
@@ -190,12 +210,41 @@ class Leases:
             group = heapq.heappop(self._heap)[2]
             triples = list(self._groups.pop(group, ()))
             for t in triples:
-                del self._held[(group[0], t)]
-                self._per_space[group[0]] -= 1
+                del self._held[group[0]][t]
                 self._discard(group[0], t, group)
+            found.append((group, [_triple(t) for t in triples]))
+            count += len(triples) + CHANGESET
+        return found
+
+    def pop_due(self, now: float, budget: int = BUDGET) -> list[tuple[_Group, list[OxTriple]]]:
+        """Return the writes expired by `now` with their triples, leases kept (about `budget`).
+
+        For a cluster replica, where an expiry holds only once the log applied
+        it: until then each is out of the heap; `requeue` puts it back.
+        """
+        found: list[tuple[_Group, list[OxTriple]]] = []
+        count = 0
+        while count < budget and self.next_due() is not None and self._heap[0][0] <= now:
+            group = heapq.heappop(self._heap)[2]
+            if any(group == g for g, _ in found):
+                continue
+            triples = [_triple(t) for t in self._groups[group]]
             found.append((group, triples))
             count += len(triples) + CHANGESET
         return found
+
+    def requeue(self, group: _Group, when: float) -> None:
+        """Sweep a write's leases again at `when` (unix seconds), if it still leases any."""
+        if group in self._groups:
+            heapq.heappush(self._heap, (when, next(self._order), group))
+
+    def live(self, group: _Group) -> bool:
+        """Return whether a write still leases any triple."""
+        return group in self._groups
+
+    def leased(self, space: str, t: OxTriple) -> bool:
+        """Return whether a triple of a space is leased."""
+        return _text(t) in self._held.get(space, ())
 
     def collect(self, count: int) -> int:
         """Queue the deletion of up to `count` garbage lease quads with the next commit.
@@ -205,31 +254,28 @@ class Leases:
         taken = 0
         while self.garbage and taken < count:
             (space, t), group = self.garbage.popitem()
-            self._changes[_quad(group, t)] = False
+            self._changes[(group, t)] = False
             self._collected(space)
             taken += 1
         return taken
 
-    def _lease(self, group: _Group, t: OxTriple) -> None:
-        if (group[0], t) not in self._held:
-            self._per_space[group[0]] = self._per_space.get(group[0], 0) + 1
-        self._held[(group[0], t)] = group
+    def _lease(self, group: _Group, t: _Text) -> None:
+        self._held.setdefault(group[0], {})[t] = group
         held = self._groups.get(group)
         if held is None:
             held = self._groups[group] = set()
             heapq.heappush(self._heap, (group[1], next(self._order), group))
         held.add(t)
 
-    def _release(self, space: str, t: OxTriple) -> None:
-        group = self._held.pop((space, t), None)
+    def _release(self, space: str, t: _Text) -> None:
+        group = self._held.get(space, {}).pop(t, None)
         if group is None:
             return
-        self._per_space[space] -= 1
         held = self._groups[group]
         held.discard(t)
         if not held:
             del self._groups[group]
-        self._changes[_quad(group, t)] = False
+        self._changes[(group, t)] = False
 
 
 def retractions(
@@ -257,8 +303,8 @@ def retractions(
     return decided
 
 
-def _quad(group: _Group, t: OxTriple) -> ox.Quad:
-    return ox.Quad(t[0], t[1], t[2], lease_graph(group))
+def _quad(group: _Group, t: _Text) -> ox.Quad:
+    return ox.Quad(*_triple(t), lease_graph(group))
 
 
 def remaining(db: StoreDB, space: str, t: OxTriple, now: float) -> float | None:

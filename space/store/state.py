@@ -288,13 +288,17 @@ class SpaceState:
         new = {t: None for t in added if t in gone or not self._has(which, t)}
         net_removed = [t for t in gone if t not in new]
         net_added = [t for t in new if t not in gone]
-        for t in net_removed:
+        self._intend(which, net_removed, net_added)
+        return net_removed, net_added
+
+    def _intend(self, which: str, removed: list, added: list) -> None:
+        """Note in the overlay that `removed` is absent and `added` present in graph `which`."""
+        for t in removed:
             self._overlay[(which, t)] = False
-        for t in net_added:
+        for t in added:
             self._overlay[(which, t)] = True
             if which == "t":
                 self._pending_objects.setdefault((t[0], t[1]), set()).add(t[2])
-        return net_removed, net_added
 
 
 def _dropped(t: OxTriple, reason: str) -> dict:
