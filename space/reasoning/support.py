@@ -158,7 +158,11 @@ class Support:
                     break
 
     def _forget(self, gone: list[T]) -> None:
-        """Drop the derivations of gone triples and those that used them."""
+        """Drop the derivations of gone triples and those that used them.
+
+        A derivation dropped from a triple that stays is dropped from its other
+        premises' dependents too, unless another of its derivations uses them.
+        """
         gone_set = set(gone)
         derivations, dependents = self.derivations, self.dependents
         for triple in gone:
@@ -169,5 +173,10 @@ class Support:
             for user in each(dependents.pop(triple, None)):
                 if user in gone_set:
                     continue
-                for d in [d for d in each(derivations.get(user)) if triple in d[1]]:
+                dropped = [d for d in each(derivations.get(user)) if triple in d[1]]
+                for d in dropped:
                     discard(derivations, user, d)
+                kept = {p for _, premises in each(derivations.get(user)) for p in premises}
+                for premise in {p for _, premises in dropped for p in premises}:
+                    if premise not in kept and premise not in gone_set:
+                        discard(dependents, premise, user)
