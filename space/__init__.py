@@ -4,48 +4,75 @@ This list is the library's API: an application (the robot's agents under
 `agents/`) imports from here and from `space.reasoning`, nothing deeper.
 """
 
-from space._display import triple_text
-from space._heap import freeze_startup, refreeze
-from space._paths import default_data_dir
-from space._ports import any_free_port
-from space._ports import probe as probe_port
-from space._request import Pending
-from space._session import check_can_listen
-from space._subscription import Change, Subscription
-from space._turtle import read_turtle
-from space.ack import Ack, Dropped
-from space.changeset import Changeset
-from space.cli.options import add_connect, identity_of
-from space.client import Transaction, TripleSpace
-from space.cluster_status import ClusterWatch
-from space.errors import (
-    ChangesetRejected,
-    InputError,
-    MalformedPayload,
-    NoQuorum,
-    NoReasoner,
-    NotApplied,
-    QueryError,
-    QueryTimeLimit,
-    SpaceError,
-    SpaceTimeout,
-    SpaceUnavailable,
-    TemplateError,
-)
-from space.explanation import Explanation, Written
-from space.functional import Replacement, declares_functional, replace_functional
-from space.identity import Identity, load_identity
-from space.keys import ROOT as KEY_ROOT
-from space.keys import escape as escape_key_chunk
-from space.keys import unescape as unescape_key_chunk
-from space.lifespan import EXPIRY_AGENT, check_lifespan
-from space.mirror import ChangeRecord, SpaceMirror
-from space.prefixes import PrefixMap
-from space.presence import alive_agents, declare_agent, watch_agents
-from space.template import Template
-from space.terms import Triple, from_nt, triple_to_nt
-from space.why import WhyService
-from space.zconfig import DEFAULT_ENDPOINT, SECURE_ENDPOINT, make_config
+from __future__ import annotations
+
+import importlib
+
+# Where each name lives (as `name` or `name=attribute`). Imported on first use
+# (PEP 562), so `import space.reasoning` loads the engine without the Zenoh
+# side, and a process pays for the parts of the API it touches.
+_HOMES = {
+    "space._display": ("triple_text",),
+    "space._heap": ("freeze_startup", "refreeze"),
+    "space._paths": ("default_data_dir",),
+    "space._ports": ("any_free_port", "probe_port=probe"),
+    "space._request": ("Pending",),
+    "space._session": ("check_can_listen",),
+    "space._subscription": ("Change", "Subscription"),
+    "space._turtle": ("read_turtle",),
+    "space.ack": ("Ack", "Dropped"),
+    "space.changeset": ("Changeset",),
+    "space.cli.options": ("add_connect", "identity_of"),
+    "space.client": ("Transaction", "TripleSpace"),
+    "space.cluster_status": ("ClusterWatch",),
+    "space.errors": (
+        "ChangesetRejected",
+        "InputError",
+        "MalformedPayload",
+        "NoQuorum",
+        "NoReasoner",
+        "NotApplied",
+        "QueryError",
+        "QueryTimeLimit",
+        "SpaceError",
+        "SpaceTimeout",
+        "SpaceUnavailable",
+        "TemplateError",
+    ),
+    "space.explanation": ("Explanation", "Written"),
+    "space.functional": ("Replacement", "declares_functional", "replace_functional"),
+    "space.identity": ("Identity", "load_identity"),
+    "space.keys": ("KEY_ROOT=ROOT", "escape_key_chunk=escape", "unescape_key_chunk=unescape"),
+    "space.lifespan": ("EXPIRY_AGENT", "check_lifespan"),
+    "space.mirror": ("ChangeRecord", "SpaceMirror"),
+    "space.prefixes": ("PrefixMap",),
+    "space.presence": ("alive_agents", "declare_agent", "watch_agents"),
+    "space.template": ("Template",),
+    "space.terms": ("Triple", "from_nt", "triple_to_nt"),
+    "space.why": ("WhyService",),
+    "space.zconfig": ("DEFAULT_ENDPOINT", "SECURE_ENDPOINT", "make_config"),
+}
+_WHERE = {
+    name: (module, attribute or name)
+    for module, names in _HOMES.items()
+    for name, _, attribute in (entry.partition("=") for entry in names)
+}
+
+
+def __getattr__(name: str) -> object:
+    """Import an API name's module on first use, and keep the name here."""
+    try:
+        module, attribute = _WHERE[name]
+    except KeyError:
+        raise AttributeError(f"module 'space' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(module), attribute)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})
+
 
 __all__ = [
     "DEFAULT_ENDPOINT",

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 import space
@@ -49,3 +51,16 @@ def test_agents_use_only_the_public_api_of_space():
         if name not in space.__all__
     ]
     assert unlisted == []
+
+
+def test_every_api_name_resolves():
+    assert all(getattr(space, name) is not None for name in space.__all__)
+    assert set(space.__all__) <= set(dir(space))
+
+
+def test_the_engine_loads_without_the_zenoh_side():
+    # Who reasons alone (bench/owl_rl.py, a tool) pays no memory for the client and Zenoh.
+    code = "import sys, space.reasoning; "
+    code += "print('zenoh' in sys.modules, 'space.client' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "False"]

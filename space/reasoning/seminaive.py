@@ -20,7 +20,6 @@ garbage, that each collection would walk again (40% of a load's time).
 from __future__ import annotations
 
 import gc
-from collections import defaultdict
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING
@@ -28,7 +27,8 @@ from typing import TYPE_CHECKING
 from space.reasoning.delta import Delta
 from space.reasoning.joins import Match
 from space.reasoning.rules import Pattern
-from space.reasoning.triples import T, _put
+from space.reasoning.support import Derivation, Entry
+from space.reasoning.triples import SMALL, T, _put
 
 if TYPE_CHECKING:
     from space.reasoning.engine import RuleEngine
@@ -61,9 +61,11 @@ def materialise(engine: RuleEngine, plus: list[T]) -> Delta:
 
 def _empty(engine: RuleEngine) -> None:
     """Empty the state in place (compiled joins hold the store's dictionaries)."""
-    store = engine._store
+    store, support = engine._store, engine._support
     for held in (store.triples, store.spo, store.pos, store.osp, engine._asserted):
         held.clear()
+    support.derivations.clear()
+    support.dependents.clear()
 
 
 def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
@@ -74,8 +76,8 @@ def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
     """
     store, asserted = engine._store, engine._asserted
     triples, spo, pos, osp = store.triples, store.spo, store.pos, store.osp
-    derivations: defaultdict[T, set] = defaultdict(set)
-    dependents: defaultdict[T, set[T]] = defaultdict(set)
+    derivations: dict[T, Entry[Derivation]] = engine._support.derivations
+    dependents: dict[T, Entry[T]] = engine._support.dependents
     starts = engine._index.starts
     # Each triple as the one object the store holds: derivations then share it,
     # not a copy per premise a join built (a third of the load's memory).
@@ -111,17 +113,13 @@ def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
                     out.clear()
         delta = list(fresh)
         fresh.clear()
-    derivations.default_factory = None  # from here on a plain mapping, as Support keeps it
-    dependents.default_factory = None
-    engine._support.derivations = derivations  # type: ignore[assignment]
-    engine._support.dependents = dependents  # type: ignore[assignment]
     return order
 
 
 def _recorders(
     engine: RuleEngine,
-    derivations: defaultdict[T, set],
-    dependents: defaultdict[T, set[T]],
+    derivations: dict[T, Entry[Derivation]],
+    dependents: dict[T, Entry[T]],
     canon: dict[T, T],
     fresh: dict[T, T],
 ) -> dict[int, Callable[[list[Match]], None]]:
@@ -135,6 +133,7 @@ def _recorders(
         "DEP": dependents,
         "CANON": canon,
         "FRESH": fresh,
+        "SMALL": SMALL,
     }
     recorders = {}
     for compiled in engine._compiled:
@@ -151,13 +150,34 @@ def _recorders(
         for i in range(heads):
             lines.append(f"        h = hs[{i}]")
             lines.append("        h = CANON.get(h) or FRESH.setdefault(h, h)")
-            lines.append("        DER[h].add(d)")
-            lines.extend(f"        DEP[prem[{j}]].add(h)" for j in range(premises))
+            lines.extend(_add("DER", "h", "d"))
+            for j in range(premises):
+                lines.extend(_add("DEP", f"prem[{j}]", "h"))
         scope: dict[str, object] = {}
         source = "\n".join(lines)
         exec(compile(source, f"<bulk record {compiled.label}>", "exec"), namespace, scope)
         recorders[compiled.order] = scope["record"]
     return recorders  # type: ignore[return-value]
+
+
+def _add(mapping: str, key: str, item: str) -> list[str]:
+    """Return the lines of `support.add(mapping, key, item)`, inlined: no call per derivation."""
+    return [
+        f"        held = {mapping}.get({key})",
+        "        if held is None:",
+        f"            {mapping}[{key}] = {item}",
+        "        elif type(held) is tuple:",
+        f"            if held != {item}:",
+        f"                {mapping}[{key}] = [held, {item}]",
+        "        elif type(held) is list:",
+        f"            if {item} not in held:",
+        "                if len(held) < SMALL:",
+        f"                    held.append({item})",
+        "                else:",
+        f"                    {mapping}[{key}] = {{*held, {item}}}",
+        "        else:",
+        f"            held.add({item})",
+    ]
 
 
 @contextmanager
