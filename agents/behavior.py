@@ -38,6 +38,7 @@ class Behavior(Agent):
         super().__init__(args)
         self.automaton = TaskAutomaton(args.docking_time, args.retry_after)
         self._task: str | None = None
+        self._serving: tuple[str, Node] | None = None  # the task and the person it is for
         self._elapsed_written = 0.0
 
     @classmethod
@@ -108,10 +109,18 @@ class Behavior(Agent):
         if plan.take_postponed and waiting is not None:
             values = self._take_postponed(plan, waiting)
             person = values.get((robot, AC.attended_person), person)
-        elif person is not None and (person, AC.postponed_by, robot) in self.view.graph:
-            values = self._settled(person)  # served again: no longer waiting
+        elif (
+            person is not None
+            and (plan.task, person) != self._serving
+            and (person, AC.postponed_by, robot) in self.view.graph
+        ):
+            # Served again, so no longer waiting; only when the service begins: this scoped
+            # agent receives a postponement in parts, the person's maybe a tick before the
+            # robot's idle task, and that tick must not take the old service for a new one.
+            values = self._settled(person)
         else:
             values = {}
+        self._serving = None if person is None else (plan.task, person)
         values |= {
             (robot, AC.target_place): URIRef(plan.target) if plan.target else None,
             (robot, AC.interacting_with): person,
