@@ -5,7 +5,7 @@ declares the agent's liveliness token and rebuilds its view (snapshot, then
 every change after it, with no gap); `run()` pulls changes from a queue and
 ticks the agent until `stop()`; `shutdown()` closes everything in reverse
 order. Space callbacks only enqueue, so nothing ever blocks inside Zenoh.
-`run_agent(cls, argv)` is the `__main__` of every `agents/NAME.py`.
+`run_agent(cls, argv)` (`agents.process`) is the `__main__` of every `agents/NAME.py`.
 """
 
 from __future__ import annotations
@@ -13,8 +13,6 @@ from __future__ import annotations
 import argparse
 import logging
 import queue
-import signal
-import sys
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -24,21 +22,19 @@ import zenoh
 from rdflib import URIRef
 from rdflib.term import Node
 
+from agents.process import build_parser as build_parser
+from agents.process import run_agent as run_agent
 from agents.view import View
 from agents.vocabulary import local_name, robot_iri
 from agents.writes import Writes
 from space import (
     Change,
-    InputError,
     SpaceError,
     SpaceTimeout,
     SpaceUnavailable,
     Subscription,
     TripleSpace,
-    add_connect,
-    check_lifespan,
     declare_agent,
-    freeze_startup,
     identity_of,
 )
 
@@ -350,80 +346,3 @@ def robot_scope(robot: URIRef, shared: Sequence[URIRef] = ()) -> list[tuple[obje
     names the clones), which is what lets the router select them by key.
     """
     return [(robot, None), (f"{robot}_*", None), *((None, p) for p in shared)]
-
-
-def build_parser(cls: type[Agent], prog: str | None = None) -> argparse.ArgumentParser:
-    """Return the command-line parser of an agent class: common options, then its own.
-
-    `prog` is how the agent was run, for its usage line (`python -m agents.KIND` by default).
-    """
-    parser = argparse.ArgumentParser(
-        prog=prog or f"python -m agents.{cls.kind}", description=(cls.__doc__ or "").split("\n")[0]
-    )
-    add_connect(parser)
-    parser.add_argument(
-        "--robot", default="robot1", help="the robot served: IRI, ac:name or name (default robot1)"
-    )
-    parser.add_argument("--name", help="the agent's name (default KIND.ROBOT, or KIND)")
-    parser.add_argument(
-        "--time-scale",
-        type=float,
-        default=1.0,
-        metavar="X",
-        help="simulated seconds per real second (default 1)",
-    )
-    parser.add_argument(
-        "--tick", type=float, default=0.2, metavar="SECONDS", help="loop period (default 0.2)"
-    )
-    parser.add_argument(
-        "--wait",
-        type=float,
-        default=30.0,
-        metavar="SECONDS",
-        help="how long to wait for a router and the store at start (default 30)",
-    )
-    parser.add_argument(
-        "--lifespan",
-        type=_lifespan,
-        metavar="DURATION",
-        help="the values this agent writes expire DURATION (500ms, 5s, 2m) after it stops "
-        "renewing them, i.e. after it dies (default: permanent)",
-    )
-    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
-    cls.add_arguments(parser)
-    return parser
-
-
-def _lifespan(text: str) -> float | None:
-    try:
-        return check_lifespan(text)
-    except InputError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from exc
-
-
-def run_agent(cls: type[Agent], argv: Sequence[str] | None = None, prog: str | None = None) -> int:
-    """Run an agent until SIGINT or SIGTERM; return the exit code (`prog`: see `build_parser`)."""
-    args = build_parser(cls, prog).parse_args(argv)
-    logging.basicConfig(
-        stream=sys.stderr,
-        level=[logging.INFO, logging.DEBUG][min(args.verbose, 1)],
-        format="%(asctime)s %(name)s %(levelname)s %(message)s",
-        force=True,
-    )
-    agent = cls(args)
-    previous = {
-        sig: signal.signal(sig, lambda *_: agent.stop()) for sig in (signal.SIGINT, signal.SIGTERM)
-    }
-    try:
-        agent.setup()
-        freeze_startup()
-        agent.run()
-        agent.log.info("stopping")
-        return 0
-    except SpaceError as exc:
-        agent.log.error("%s", exc)
-        return 1
-    finally:
-        agent.shutdown()
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)

@@ -1,4 +1,8 @@
-"""The reasoner's knowledge files: which rules and ontology it runs, and whether they changed."""
+"""The reasoner's knowledge files: which rules and ontology it runs, and whether they changed.
+
+They are written into a space that lacks them (`Knowledge.seed`), so that other
+agents and the HMI read the same ontology the reasoner runs.
+"""
 
 from __future__ import annotations
 
@@ -8,11 +12,17 @@ import time
 import warnings
 from pathlib import Path
 
+from rdflib import OWL, RDF, URIRef
+from rdflib.term import Node
+
 from agents.resources import data_file
-from space.reasoning import Engine, UnsupportedAxiom, engine_from_files
+from agents.vocabulary import AC
+from space import TripleSpace
+from space.reasoning import Engine, UnsupportedAxiom, engine_from_files, read_graph
 
 log = logging.getLogger("tspace.reasoner")
 RELOAD_PERIOD = 1.0  # seconds between looks at the rules files
+ONTOLOGY_IRI = URIRef("https://w3id.org/tspace/selfconfig")
 
 
 class Knowledge:
@@ -48,6 +58,22 @@ class Knowledge:
             else:
                 warnings.showwarning(w.message, w.category, w.filename, w.lineno)
         return engine
+
+    def seed(
+        self,
+        ts: TripleSpace,
+        robot: Node,
+        robot_file: Path | None,
+        timeout: float,
+        agent_log: logging.Logger,
+    ) -> None:
+        """Write the ontology, and `robot_file` if its robot is not there, into the space."""
+        if not len(ts.query((ONTOLOGY_IRI, RDF.type, OWL.Ontology))):
+            ts.write(read_graph(self.ontology), timeout=timeout)
+            agent_log.info("wrote the ontology into the space")
+        if robot_file and not len(ts.query((robot, RDF.type, AC.Robot))):
+            ts.write(read_graph([robot_file]), timeout=timeout)
+            agent_log.info("wrote %s into the space", robot_file)
 
     def changed(self) -> bool:
         """Return True if a rules file changed since `build` (looked at once a second)."""

@@ -33,7 +33,7 @@ from rdflib.term import Node
 
 from agents.vocabulary import AC, local_name
 from space import KEY_ROOT, Triple, escape_key_chunk, unescape_key_chunk
-from space.reasoning import Engine
+from space.reasoning import Engine, Firing
 
 PREFIX = "reasoner."
 
@@ -57,6 +57,21 @@ def concerned_robot(engine: Engine, triples: Iterable[Triple]) -> Node | None:
     """Return the one robot whose things a change touches; None if it touches none or several."""
     robots = {owner(engine, s) for s, _p, _o in triples} - {None}
     return robots.pop() if len(robots) == 1 else None
+
+
+def firing_robot(engine: Engine, firing: Firing, robots: dict[Node, bool], default: Node) -> Node:
+    """Return the robot a firing concerned: the first robot among its premises, else `default`.
+
+    `robots` remembers which subjects are robots for one answer: its
+    firings share their premises' subjects, so the engine is asked once each.
+    """
+    for s, _p, _o in firing.triggers:
+        is_robot = robots.get(s)
+        if is_robot is None:
+            is_robot = robots[s] = (s, RDF.type, AC.Robot) in engine
+        if is_robot:
+            return s
+    return default
 
 
 def _roster_key(space: str, entry: str = "*") -> str:

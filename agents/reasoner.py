@@ -8,7 +8,7 @@ cause: what production rules changed (asserted) and what is entailed
 own changesets are ignored. A changed rules file is reloaded without a
 restart; a broken one is logged with its line and column and the rules in
 force stay. On start it writes the ontology (and `--robot-file`) into the
-space when the space does not have them yet. It answers `why` on the space's
+space when the space does not have them yet (`agents.knowledge`). It answers `why` on the space's
 `@/why` queryable (`space.WhyService`; who wrote what: `agents.writers`).
 
 One reasoner serves a whole fleet. With `--per-robot`, one per robot instead
@@ -21,29 +21,26 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
-from collections import deque
 from collections.abc import Callable
 from pathlib import Path
 
 import zenoh
-from rdflib import OWL, RDF, URIRef
+from rdflib import OWL, RDF
 from rdflib.term import Node
 
 from agents.answers import Ledger, present_truth
 from agents.base import Agent, run_agent
 from agents.conflicts import ConflictRecords
 from agents.firings import FIRING_PREFIX, FiringLog, without_records
+from agents.in_flight import InFlight
 from agents.knowledge import Knowledge
-from agents.ownership import PREFIX, Roster, concerned_robot
-from agents.vocabulary import AC, local_name
+from agents.ownership import PREFIX, Roster, concerned_robot, firing_robot
+from agents.vocabulary import local_name
 from agents.writers import Writers
 from space import (
     Change,
     Changeset,
     Explanation,
-    Pending,
-    SpaceError,
-    SpaceTimeout,
     Subscription,
     Template,
     Triple,
@@ -56,15 +53,10 @@ from space.reasoning import (
     Delta,
     Engine,
     Explainer,
-    Firing,
     Origin,
     RuleError,
     RuleLoopError,
-    read_graph,
 )
-
-ONTOLOGY_IRI = URIRef("https://w3id.org/tspace/selfconfig")
-IN_FLIGHT = 64  # answers sent, not yet acknowledged, at most
 
 
 class Reasoner(Agent):
@@ -89,7 +81,7 @@ class Reasoner(Agent):
         self._others: zenoh.Subscriber | None = None
         self._joined: zenoh.LivelinessToken | None = None
         self.knowledge = Knowledge(args.rules, args.ontology)
-        self._unacked: deque[tuple[Changeset, Pending]] = deque()
+        self._in_flight = InFlight(args.timeout, self._stop, self.log)
         self._ledger = Ledger()
         self._diverged = False  # an answer was not taken, and no resync has succeeded since
         self._loaded_seq = 0
@@ -151,7 +143,8 @@ class Reasoner(Agent):
             None, self._inbox.put, timeout=self.args.timeout, skip_own=True
         )
         try:
-            self._seed()
+            args = self.args
+            self.knowledge.seed(self.ts, self.robot, args.robot_file, args.timeout, self.log)
             asserted, inferred, seq = self.ts.graphs(timeout=self.args.timeout)
         except BaseException:
             self.ts.unsubscribe(subscription)  # setup() may retry: no second delivery
@@ -218,17 +211,6 @@ class Reasoner(Agent):
             self._joined, self._others = None, None
             super().shutdown()
 
-    def _seed(self) -> None:
-        """Write the ontology and the robot file into the space if it lacks them."""
-        assert self.ts is not None
-        if not len(self.ts.query((ONTOLOGY_IRI, RDF.type, OWL.Ontology))):
-            self.ts.write(read_graph(self.knowledge.ontology), timeout=self.args.timeout)
-            self.log.info("wrote the ontology into the space")
-        robot_file = self.args.robot_file
-        if robot_file and not len(self.ts.query((self.robot, RDF.type, AC.Robot))):
-            self.ts.write(read_graph([robot_file]), timeout=self.args.timeout)
-            self.log.info("wrote %s into the space", robot_file)
-
     # Changes
 
     def on_change(self, change: Change) -> None:
@@ -284,7 +266,7 @@ class Reasoner(Agent):
     ) -> None:
         """Write a delta (and its firing records) to the space as one changeset.
 
-        Without `wait`, the store's acknowledgement is read later (`_settle`):
+        Without `wait`, the store's acknowledgement is read later (`agents.in_flight`):
         changes waiting in the queue (a backlog after a cut) are answered without
         a round trip to the store each, in order; the run loop's tick, after the
         queue is empty, reads them.
@@ -306,7 +288,9 @@ class Reasoner(Agent):
         added, removed = list(delta.asserted_added), list(delta.asserted_removed)
         robots: dict[Node, bool] = {}
         for firing in delta.firings:
-            new, old = self.firings.record(firing.rule, cause, self._robot_of(firing, robots))
+            new, old = self.firings.record(
+                firing.rule, cause, firing_robot(self.engine, firing, robots, self.robot)
+            )
             added += new
             removed += old
         if loop is not None:
@@ -330,9 +314,9 @@ class Reasoner(Agent):
         if wait:
             self.ts.send(cs, timeout=self.args.timeout)
             return
-        self._unacked.append((cs, self.ts.send_later(cs, timeout=self.args.timeout)))
-        if len(self._unacked) > IN_FLIGHT:
-            self._settle(len(self._unacked) - IN_FLIGHT)
+        if self._in_flight.send(self.ts, cs):
+            self._diverged = True
+            self._resync()
 
     def _settle(self, count: int | None = None) -> None:
         """Read the acknowledgements of `count` answers in flight (all by default), oldest first.
@@ -340,59 +324,10 @@ class Reasoner(Agent):
         An answer the store did not take leaves the engine ahead of the space: once
         the answers in flight are read, the engine is rebuilt from the space (`_resync`).
         """
-        lost = False
-        while self._unacked and (count is None or count > 0):
-            cs, pending = self._unacked.popleft()
-            try:
-                self._acknowledged(cs, pending)
-            except SpaceError as exc:
-                self.log.warning("answer to change %s not taken: %s", cs.cause, exc)
-                lost = True
-            if count is not None:
-                count -= 1
-        if lost:
-            self._settle()
+        assert self.ts is not None
+        if self._in_flight.settle(self.ts, count):
             self._diverged = True
             self._resync()
-
-    def _acknowledged(self, cs: Changeset, pending: Pending) -> None:
-        """Wait for an answer's acknowledgement, sending it again while the store is only slow.
-
-        A store that answers later than `--timeout` (a backlog of writes ahead of the
-        answer) still applies the answer it holds. Taking that for a refusal made the
-        reasoner rebuild its engine and skip every change the space then held: those
-        changes got one answer naming none of them, seconds late (bench/fleet.py at
-        2,000 changesets/s). The same changeset again (its id) is safe: a store answers
-        a retried id with the first one's outcome. Stopping ends the wait.
-
-        Raises:
-            SpaceError: the store refused it, or none answered, or the agent is stopping.
-        """
-        assert self.ts is not None
-        while True:
-            try:
-                pending.result()
-                return
-            except SpaceTimeout:
-                if self._stop.is_set():
-                    raise
-                self.log.warning("answer to change %s not acknowledged yet: sent again", cs.cause)
-                pending = self.ts.send_later(cs, timeout=self.args.timeout)
-
-    def _robot_of(self, firing: Firing, robots: dict[Node, bool]) -> Node:
-        """Return the robot a firing concerned: the first robot among its premises, else `--robot`.
-
-        `robots` remembers which subjects are robots for one answer: its
-        firings share their premises' subjects, so the engine is asked once each.
-        """
-        assert self.engine is not None
-        for s, _p, _o in firing.triggers:
-            is_robot = robots.get(s)
-            if is_robot is None:
-                is_robot = robots[s] = (s, RDF.type, AC.Robot) in self.engine
-            if is_robot:
-                return s
-        return self.robot
 
     # Rules reload
 

@@ -5,7 +5,7 @@ Two halves, with a seam between them that a replicated log plugs into
 
 1. Decide and order a changeset: `state.SpaceState.decide` turns a checked
    request (`intake.WriteRequest`) into the net changeset it makes, with the
-   next sequence number, as a `db.Entry` (triples, log payload, request id).
+   next sequence number, as a `db_layout.Entry` (triples, log payload, request id).
    Embedded, the order is the store's writer thread and the log is Oxigraph's
    own `log:<space>` graph.
 2. Apply an ordered changeset: `db.StoreDB.commit` writes a batch of entries,

@@ -15,17 +15,8 @@ import weakref
 import pyoxigraph as ox
 
 from space.store.cluster_entries import SpaceImage
-from space.store.db import (
-    INT,
-    META,
-    SEQ,
-    STORE,
-    Entry,
-    StoreDB,
-    graph,
-    log_graph,
-    space_node,
-)
+from space.store.db import StoreDB
+from space.store.db_layout import INT, META, SEQ, STORE, Entry, graph, log_graph, space_node
 from space.store.render import update
 
 REVISION = ox.NamedNode("urn:tspace:revision")

@@ -38,7 +38,8 @@ from space.lifespan import EXPIRY_AGENT
 from space.store import oxterms
 from space.store.cluster_keys import digest
 from space.store.cluster_state import ClusterSpace
-from space.store.db import Entry, StoreDB
+from space.store.db import StoreDB
+from space.store.db_layout import Entry
 from space.store.etcd_log import Entry as LogEntry
 from space.store.intake import WriteRequest
 from space.store.lifespans import BUDGET, LEASE, Leases

@@ -23,7 +23,8 @@ from collections import ChainMap
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload
 from space.prefixes import PrefixMap
-from space.store.db import Entry, StoreDB
+from space.store.db import StoreDB
+from space.store.db_layout import Entry
 from space.store.intake import WriteRequest
 from space.store.state import Net, SpaceState
 

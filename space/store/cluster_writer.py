@@ -10,7 +10,7 @@ is appended once that one committed, its guard on those keys raised to that
 revision, and fails with it if it fails.
 
 Nothing is acknowledged before the replica itself applied the revision the
-changeset committed at: the ack carries the seq every replica gives it, and
+changeset committed at (`cluster_apply`): the ack carries the seq every replica gives it, and
 the writer reads its own write from the replica that answered. A guard that
 no longer holds (`WriteConflict`) sends the request back to be decided again
 once the replica caught up with etcd; a request id committed by another
@@ -29,9 +29,10 @@ from collections.abc import Callable
 import zenoh
 
 from space import keys
-from space.changeset import pack, unpack
-from space.errors import MalformedPayload, SpaceError, WriteConflict
+from space.changeset import unpack
+from space.errors import SpaceError, WriteConflict
 from space.store import intake
+from space.store.cluster_apply import acknowledge, install
 from space.store.cluster_expiry import ClusterExpiry
 from space.store.cluster_flights import Flight, chain, committed, guarded_entry
 from space.store.cluster_node import ClusterNode, Done
@@ -334,32 +335,7 @@ class ClusterWriter:
         applied, self._applied = self._applied, []
         if self.failed:
             return
-        nets: list[tuple[ClusterSpace, Net]] = []
-        ours: list[tuple[Flight, Net]] = []
-        for revision, batches in applied:
-            for batch in batches:
-                try:
-                    state = self._space(keys.check_space(batch.space))
-                except (SpaceError, ValueError) as exc:
-                    log.error("revision %d: skipped a space with a bad name: %s", revision, exc)
-                    continue
-                for i, payload in enumerate(batch.payloads):
-                    try:
-                        net = state.install_at(payload, batch.first_seq + i)
-                    except (MalformedPayload, ValueError) as exc:
-                        log.error(
-                            "revision %d of %s: skipped a malformed changeset: %s",
-                            revision,
-                            batch.space,
-                            exc,
-                        )
-                        continue
-                    nets.append((state, net))
-                    flight = self._by_payload.get(payload)
-                    self.expiry.applied(state.name, payload, net, ours=flight is not None)
-                    if flight is not None:
-                        net.entry.dropped = flight.net.entry.dropped
-                        ours.append((flight, net))
+        nets, ours = install(applied, self._space, self._by_payload, self.expiry)
         last = applied[-1][0]
         try:
             self.db.commit([n.entry for _, n in nets], self.expiry.changes(), revision=last)
@@ -373,19 +349,7 @@ class ClusterWriter:
             flight.state.landed(flight.net.entry)
         for state in {id(s): s for s, _ in nets}.values():
             state.settle()
-        for flight, net in ours:
-            ack = pack(flight.reply(net))
-            if flight.req.query is not None:
-                flight.req.query.reply(flight.req.key, ack)
-                flight.req.query.drop()
-            for req in flight.followers:
-                answer(req, {**flight.reply(net), "again": True})
-        mine = {id(n): f for f, n in ours}
-        for state, net in nets:  # in log order: each part names the changeset before it
-            if id(net) in mine:
-                self._publisher.publish([(state, net)])
-            else:
-                self._publisher.note(state, net)
+        acknowledge(nets, ours, self._publisher)
         self._release()
 
     def _release(self) -> None:

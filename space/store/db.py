@@ -1,16 +1,6 @@
 """The store's durable memory: one on-disk Oxigraph database holding every space and its log.
 
-Layout (every IRI under `urn:tspace:`, space names being IRI-safe):
-
-- `graph:<space>:asserted`, `graph:<space>:inferred`: the space's triples; SPARQL
-  reads their union as its default graph.
-- `graph:<space>:stamps`: for each functional `(s p)` its writer's HLC timestamp,
-  as the triple `s p "<timestamp>"`, so the later-timestamp rule survives restarts.
-- `meta`: `space:<space> seq N` (the space's sequence number: the largest N, older
-  ones are dropped at compaction) and its prefixes.
-- `log:<space>`: per changeset `log:<space>:<seq>` with its `n`, the published
-  payload (base64 msgpack), the request id it answered and what its writer was
-  told was not applied.
+The layout of spaces in it (graphs, log entries) is `db_layout`.
 
 `commit` writes a batch of changesets, each with its log entry and sequence
 number, as ONE N-Quads load or SPARQL UPDATE (`render.py`): Oxigraph applies
@@ -29,35 +19,35 @@ import logging
 import time
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
 
 import pyoxigraph as ox
 
 from space.errors import SpaceError
 from space.store import oxterms
+from space.store.db_layout import (
+    DROPPED,
+    FUNCTIONAL,
+    META,
+    PAYLOAD,
+    PREFIX,
+    REQUEST,
+    ROOT,
+    SEQ,
+    STORE,
+    Entry,
+    N,
+    entry_node,
+    graph,
+    log_graph,
+    space_node,
+)
 from space.store.flusher import Flusher
 from space.store.oxterms import OxTerm, OxTriple
 
 log = logging.getLogger("tspace.store")
 
-FORMAT = "2"  # 1 was SQLite (space.sqlite3)
 COMPACT_EVERY = 1000  # commits of a space between compactions of its log and seqs
-_U = "urn:tspace:"
-META = ox.NamedNode(_U + "meta")
-SEQ = ox.NamedNode(_U + "seq")
-PREFIX = ox.NamedNode(_U + "prefix")
-FORMAT_P = ox.NamedNode(_U + "format")
-STORE = ox.NamedNode(_U + "store")
-N = ox.NamedNode(_U + "n")
-PAYLOAD = ox.NamedNode(_U + "payload")
-REQUEST = ox.NamedNode(_U + "request")
-DROPPED = ox.NamedNode(_U + "dropped")
-INT = ox.NamedNode("http://www.w3.org/2001/XMLSchema#integer")
-FUNCTIONAL = (
-    "http://www.w3.org/1999/02/22-rdf-syntax-ns#type",
-    "http://www.w3.org/2002/07/owl#FunctionalProperty",
-)
 
 
 class CommitFailed(SpaceError):
@@ -66,44 +56,6 @@ class CommitFailed(SpaceError):
 
 class DataDirInUse(SpaceError):
     """Another store process has the data directory open."""
-
-
-@lru_cache(maxsize=4096)
-def graph(space: str, which: str) -> ox.NamedNode:
-    """Return the IRI of a space's graph: `t` (asserted), `i` (inferred) or `stamps`."""
-    name = {"t": "asserted", "i": "inferred"}.get(which, which)
-    return ox.NamedNode(f"{_U}graph:{space}:{name}")
-
-
-def space_node(space: str) -> ox.NamedNode:
-    return ox.NamedNode(f"{_U}space:{space}")
-
-
-def log_graph(space: str) -> ox.NamedNode:
-    return ox.NamedNode(f"{_U}log:{space}")
-
-
-def _entry(space: str, seq: int) -> ox.NamedNode:
-    return ox.NamedNode(f"{_U}log:{space}:{seq}")
-
-
-@dataclass
-class Entry:
-    """One net changeset to commit: its triples, stamps, prefixes and log entry."""
-
-    space: str
-    seq: int
-    request: str
-    payload: bytes
-    dropped: bytes = b""  # msgpack of what the writer was told was not applied (if anything)
-    removed: list[OxTriple] = field(default_factory=list)
-    added: list[OxTriple] = field(default_factory=list)
-    plain: list[list[str]] = field(default_factory=list)  # asserted additions, N-Triples texts
-    inferred_removed: list[OxTriple] = field(default_factory=list)
-    inferred_added: list[OxTriple] = field(default_factory=list)
-    prefixes: dict[str, str] = field(default_factory=dict)
-    stamps_removed: list[OxTriple] = field(default_factory=list)
-    stamps_added: list[OxTriple] = field(default_factory=list)
 
 
 @dataclass
@@ -162,7 +114,7 @@ class StoreDB:
 
     def spaces(self) -> list[str]:
         """Return the names of the spaces that were ever written."""
-        prefix = f"{_U}space:"
+        prefix = f"{ROOT}space:"
         names = (
             q.subject.value[len(prefix) :]
             for q in self.store.quads_for_pattern(None, SEQ, None, META)
@@ -276,7 +228,7 @@ class StoreDB:
 
         self.store = None  # type: ignore[assignment]
         gc.collect()
-        p, m, st = f"{_U}probe", META.value, STORE.value
+        p, m, st = f"{ROOT}probe", META.value, STORE.value
         try:
             self.store = open_store(self.data_dir, self.path)
             self.store.update(
@@ -312,7 +264,7 @@ class StoreDB:
         rows = []
         g = log_graph(space)
         for seq in range(max(first, 1), last + 1):
-            for q in self.store.quads_for_pattern(_entry(space, seq), PAYLOAD, None, g):
+            for q in self.store.quads_for_pattern(entry_node(space, seq), PAYLOAD, None, g):
                 rows.append((seq, base64.b64decode(q.object.value)))
         return rows
 
@@ -392,19 +344,3 @@ def _size(e: Entry) -> int:
         + len(e.inferred_added)
         + len(e.inferred_removed)
     )
-
-
-def log_quads(
-    space: str, seq: int, request: str, payload: bytes, dropped: bytes = b""
-) -> list[ox.Quad]:
-    """Return the quads of one log entry: its seq, payload, request id and what was dropped."""
-    entry, g = _entry(space, seq), log_graph(space)
-    quads = [
-        ox.Quad(entry, N, ox.Literal(str(seq), datatype=INT), g),
-        ox.Quad(entry, PAYLOAD, ox.Literal(base64.b64encode(payload).decode("ascii")), g),
-    ]
-    if request:
-        quads.append(ox.Quad(entry, REQUEST, ox.Literal(request), g))
-    if dropped:
-        quads.append(ox.Quad(entry, DROPPED, ox.Literal(base64.b64encode(dropped).decode()), g))
-    return quads

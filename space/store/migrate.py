@@ -20,7 +20,7 @@ import pyoxigraph as ox
 
 from space.changeset import unpack
 from space.errors import MalformedPayload, SpaceError
-from space.store import db, oxterms
+from space.store import db, db_layout, oxterms
 
 log = logging.getLogger("tspace.store")
 
@@ -46,12 +46,16 @@ def open_store(data_dir: Path, path: Path) -> ox.Store:
                 f"data directory {path.parent} is in use by another store process"
             ) from None
         raise
-    marked = any(store.quads_for_pattern(db.STORE, db.FORMAT_P, None, db.META))
+    marked = any(store.quads_for_pattern(db_layout.STORE, db_layout.FORMAT_P, None, db_layout.META))
     old = data_dir / OLD_FILE
     if not marked:
         if old.exists():
             _migrate(old, store)
-        store.add(ox.Quad(db.STORE, db.FORMAT_P, ox.Literal(db.FORMAT), db.META))
+        store.add(
+            ox.Quad(
+                db_layout.STORE, db_layout.FORMAT_P, ox.Literal(db_layout.FORMAT), db_layout.META
+            )
+        )
         store.flush()
     return store
 
@@ -96,16 +100,19 @@ def _copy_space(conn: sqlite3.Connection, store: ox.Store, space: str) -> int:
         except MalformedPayload:
             skipped += 1
             continue
-        quads.append(ox.Quad(*t, db.graph(space, g)))
+        quads.append(ox.Quad(*t, db_layout.graph(space, g)))
         if ts and g == "t":
-            quads.append(ox.Quad(t[0], t[1], ox.Literal(ts), db.graph(space, "stamps")))
-    node = db.space_node(space)
-    quads.append(ox.Quad(node, db.SEQ, ox.Literal(str(seq), datatype=db.INT), db.META))
+            quads.append(ox.Quad(t[0], t[1], ox.Literal(ts), db_layout.graph(space, "stamps")))
+    node = db_layout.space_node(space)
+    quads.append(
+        ox.Quad(node, db_layout.SEQ, ox.Literal(str(seq), datatype=db_layout.INT), db_layout.META)
+    )
     quads += [
-        ox.Quad(node, db.PREFIX, ox.Literal(f"{n} {ns}"), db.META) for n, ns in prefixes.items()
+        ox.Quad(node, db_layout.PREFIX, ox.Literal(f"{n} {ns}"), db_layout.META)
+        for n, ns in prefixes.items()
     ]
     for n, payload in keep:
-        quads += db.log_quads(space, n, _request_id(payload), payload)
+        quads += db_layout.log_quads(space, n, _request_id(payload), payload)
     store.bulk_extend(quads)
     return skipped
 

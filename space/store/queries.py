@@ -21,7 +21,8 @@ from space.changeset import pack
 from space.errors import MalformedPayload, QueryError, QueryTimeLimit
 from space.prefixes import PrefixMap
 from space.store import oxterms
-from space.store.db import META, SEQ, StoreDB, graph, space_node
+from space.store.db import StoreDB
+from space.store.db_layout import META, SEQ, graph, space_node
 from space.store.intake import QueryRequest
 from space.store.lifespans import remaining
 from space.terms import from_nt, to_nt

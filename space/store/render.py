@@ -18,7 +18,17 @@ from collections.abc import Iterable
 
 import pyoxigraph as ox
 
-from space.store.db import INT, META, PREFIX, SEQ, Entry, graph, log_graph, log_quads, space_node
+from space.store.db_layout import (
+    INT,
+    META,
+    PREFIX,
+    SEQ,
+    Entry,
+    graph,
+    log_graph,
+    log_quads,
+    space_node,
+)
 
 
 def plain(entries: list[Entry]) -> bool:

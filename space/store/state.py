@@ -17,7 +17,8 @@ import pyoxigraph as ox
 from space.changeset import WIRE_VERSION, hlc_key, pack, published_seq
 from space.prefixes import PrefixMap
 from space.store import oxterms
-from space.store.db import FUNCTIONAL, Entry, StoreDB
+from space.store.db import StoreDB
+from space.store.db_layout import FUNCTIONAL, Entry
 from space.store.intake import LISTS, WriteRequest
 from space.store.lifespans import Leases
 from space.store.oxterms import OxTerm, OxTriple

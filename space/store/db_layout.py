@@ -1,0 +1,100 @@
+"""How the store lays spaces out in its one Oxigraph database: graph and log IRIs.
+
+Layout (every IRI under `urn:tspace:`, space names being IRI-safe):
+
+- `graph:<space>:asserted`, `graph:<space>:inferred`: the space's triples; SPARQL
+  reads their union as its default graph.
+- `graph:<space>:stamps`: for each functional `(s p)` its writer's HLC timestamp,
+  as the triple `s p "<timestamp>"`, so the later-timestamp rule survives restarts.
+- `meta`: `space:<space> seq N` (the space's sequence number: the largest N, older
+  ones are dropped at compaction) and its prefixes.
+- `log:<space>`: per changeset `log:<space>:<seq>` with its `n`, the published
+  payload (base64 msgpack), the request id it answered and what its writer was
+  told was not applied.
+
+Apart from `StoreDB` because the database, the N-Quads and SPARQL it is written
+with (`render`), the cluster's additions (`cluster_db`) and the migration from
+SQLite (`migrate`) all name the same graphs; none of them needs the database
+object to do so.
+"""
+
+from __future__ import annotations
+
+import base64
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import pyoxigraph as ox
+
+from space.store.oxterms import OxTriple
+
+FORMAT = "2"  # 1 was SQLite (space.sqlite3)
+ROOT = "urn:tspace:"
+META = ox.NamedNode(ROOT + "meta")
+SEQ = ox.NamedNode(ROOT + "seq")
+PREFIX = ox.NamedNode(ROOT + "prefix")
+FORMAT_P = ox.NamedNode(ROOT + "format")
+STORE = ox.NamedNode(ROOT + "store")
+N = ox.NamedNode(ROOT + "n")
+PAYLOAD = ox.NamedNode(ROOT + "payload")
+REQUEST = ox.NamedNode(ROOT + "request")
+DROPPED = ox.NamedNode(ROOT + "dropped")
+INT = ox.NamedNode("http://www.w3.org/2001/XMLSchema#integer")
+FUNCTIONAL = (
+    "http://www.w3.org/1999/02/22-rdf-syntax-ns#type",
+    "http://www.w3.org/2002/07/owl#FunctionalProperty",
+)
+
+
+@lru_cache(maxsize=4096)
+def graph(space: str, which: str) -> ox.NamedNode:
+    """Return the IRI of a space's graph: `t` (asserted), `i` (inferred) or `stamps`."""
+    name = {"t": "asserted", "i": "inferred"}.get(which, which)
+    return ox.NamedNode(f"{ROOT}graph:{space}:{name}")
+
+
+def space_node(space: str) -> ox.NamedNode:
+    return ox.NamedNode(f"{ROOT}space:{space}")
+
+
+def log_graph(space: str) -> ox.NamedNode:
+    return ox.NamedNode(f"{ROOT}log:{space}")
+
+
+def entry_node(space: str, seq: int) -> ox.NamedNode:
+    return ox.NamedNode(f"{ROOT}log:{space}:{seq}")
+
+
+@dataclass
+class Entry:
+    """One net changeset to commit: its triples, stamps, prefixes and log entry."""
+
+    space: str
+    seq: int
+    request: str
+    payload: bytes
+    dropped: bytes = b""  # msgpack of what the writer was told was not applied (if anything)
+    removed: list[OxTriple] = field(default_factory=list)
+    added: list[OxTriple] = field(default_factory=list)
+    plain: list[list[str]] = field(default_factory=list)  # asserted additions, N-Triples texts
+    inferred_removed: list[OxTriple] = field(default_factory=list)
+    inferred_added: list[OxTriple] = field(default_factory=list)
+    prefixes: dict[str, str] = field(default_factory=dict)
+    stamps_removed: list[OxTriple] = field(default_factory=list)
+    stamps_added: list[OxTriple] = field(default_factory=list)
+
+
+def log_quads(
+    space: str, seq: int, request: str, payload: bytes, dropped: bytes = b""
+) -> list[ox.Quad]:
+    """Return the quads of one log entry: its seq, payload, request id and what was dropped."""
+    entry, g = entry_node(space, seq), log_graph(space)
+    quads = [
+        ox.Quad(entry, N, ox.Literal(str(seq), datatype=INT), g),
+        ox.Quad(entry, PAYLOAD, ox.Literal(base64.b64encode(payload).decode("ascii")), g),
+    ]
+    if request:
+        quads.append(ox.Quad(entry, REQUEST, ox.Literal(request), g))
+    if dropped:
+        quads.append(ox.Quad(entry, DROPPED, ox.Literal(base64.b64encode(dropped).decode()), g))
+    return quads
