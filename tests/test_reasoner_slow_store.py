@@ -2,17 +2,22 @@
 
 from __future__ import annotations
 
+import os
+import signal
+import time
+
 from rdflib import Literal, Namespace
 
 from conftest import wait_for
 from space import Change, TripleSpace
 
 EX = Namespace("http://example.org/")
-WRITES = 2000  # a burst the store takes seconds to commit: far longer than --timeout
+WRITES = 2000  # a burst the reasoner is still answering when the store stalls
+STALL = 1.0  # seconds the store is stopped (SIGSTOP): five times the reasoner's --timeout
 
 
 def test_answers_acknowledged_after_the_timeout_are_not_replaced_by_a_resync(
-    ts: TripleSpace, launch, tmp_path
+    ts: TripleSpace, server, launch, tmp_path
 ):
     rules = tmp_path / "level.rules"
     rules.write_text(
@@ -32,6 +37,14 @@ def test_answers_acknowledged_after_the_timeout_are_not_replaced_by_a_resync(
             ts.send_nowait(ts.changeset([(EX[f"s{i}"], EX.level, Literal("low"))]))
             for i in range(WRITES)
         ]
+        # The store stalls (a disk or a machine that busy) while answers are in flight: their
+        # acknowledgements come later than --timeout.
+        wait_for(lambda: len(answered) >= 20, 60, "the reasoner answering", agent.logs)
+        os.kill(server.proc.pid, signal.SIGSTOP)
+        try:
+            time.sleep(STALL)  # the stall is the point
+        finally:
+            os.kill(server.proc.pid, signal.SIGCONT)
         wait_for(
             lambda: answered >= set(markers),
             120,
@@ -47,4 +60,4 @@ def test_answers_acknowledged_after_the_timeout_are_not_replaced_by_a_resync(
     # The answers were taken, later: not refused, no engine rebuilt (which skipped changes).
     assert "not taken" not in agent.logs()
     assert "resynchronised" not in agent.logs()
-    assert "not acknowledged yet: sent again" in agent.logs()  # the store was that slow
+    assert "not acknowledged yet: sent again" in agent.logs()  # the stall was seen
