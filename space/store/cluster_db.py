@@ -10,8 +10,6 @@ spaces and the new revision in one update.
 
 from __future__ import annotations
 
-import weakref
-
 import pyoxigraph as ox
 
 from space.store.cluster_entries import SpaceImage
@@ -22,27 +20,31 @@ from space.store.render import update
 REVISION = ox.NamedNode("urn:tspace:revision")
 
 
-# The revision quad each open database holds, as this process last wrote it.
-_held: weakref.WeakKeyDictionary[StoreDB, list[str]] = weakref.WeakKeyDictionary()
-
-
 def revision_ops(db: StoreDB, revision: int) -> list[str]:
     """Return the SPARQL operations that record the applied etcd revision.
 
-    The revision held is removed by its exact quad (DELETE DATA), remembered
-    from the last commit: rewritten at every commit, its key range fills with
-    RocksDB tombstones, and a lookup there (or a DELETE WHERE) costs ~1 ms a
-    commit, which a replica pays for every batch it applies.
+    The revision held is removed by its exact quad (DELETE DATA), as the last
+    commit left it (`db.revision_objects`, noted by `revision_written`):
+    rewritten at every commit, its key range fills with RocksDB tombstones, and
+    a lookup there (or a DELETE WHERE) costs ~1 ms a commit, which a replica
+    pays for every batch it applies.
     """
     m, st, r = META.value, STORE.value, REVISION.value
-    held = _held.get(db)
+    held = db.revision_objects
     if held is None:
         held = [str(q.object) for q in _revisions(db)]
     ops = [f"DELETE DATA {{ GRAPH <{m}> {{ <{st}> <{r}> {o} }} }}" for o in held]
-    now = f'"{revision}"^^<{INT.value}>'
-    ops.append(f"INSERT DATA {{ GRAPH <{m}> {{ <{st}> <{r}> {now} }} }}")
-    _held[db] = [now]
+    ops.append(f"INSERT DATA {{ GRAPH <{m}> {{ <{st}> <{r}> {_object(revision)} }} }}")
     return ops
+
+
+def revision_written(db: StoreDB, revision: int) -> None:
+    """Note that a commit of `revision_ops(db, revision)` succeeded (the quad the next removes)."""
+    db.revision_objects = [_object(revision)]
+
+
+def _object(revision: int) -> str:
+    return f'"{revision}"^^<{INT.value}>'
 
 
 def _revisions(db: StoreDB) -> list[ox.Quad]:
@@ -103,6 +105,7 @@ def replace_all(
         db.store.flush()
     except (OSError, RuntimeError) as exc:
         raise CommitFailed(f"the database could not commit: {exc}") from exc
+    revision_written(db, revision)
 
 
 def _parse(lines: list[str]) -> list[tuple]:

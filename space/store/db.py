@@ -101,6 +101,8 @@ class StoreDB:
             self.store = ox.Store.read_only(str(self.path))
             self.open_error = f"the database opened read-only: {exc}"
         self._commits: dict[str, int] = {}  # per space, since its last compaction
+        # A cluster replica's revision quad(s) as its last commit left them (None: not read).
+        self.revision_objects: list[str] | None = None
         self._flusher = Flusher(lambda: self.store if hasattr(self, "store") else None)
 
     def close(self) -> None:
@@ -199,6 +201,10 @@ class StoreDB:
                 self.store.flush()
         except (OSError, RuntimeError) as exc:
             raise CommitFailed(f"the database could not commit: {exc}") from exc
+        if revision is not None:
+            from space.store.cluster_db import revision_written
+
+            revision_written(self, revision)
         if not self.durable:
             self._flusher.wrote(sum(map(_size, entries)) + len(extra[1]))
         for e in entries:
@@ -227,6 +233,7 @@ class StoreDB:
         from space.store.migrate import open_store
 
         self.store = None  # type: ignore[assignment]
+        self.revision_objects = None  # read again from what the reopened database holds
         gc.collect()
         p, m, st = f"{ROOT}probe", META.value, STORE.value
         try:

@@ -204,16 +204,11 @@ class Leases:
         Their leases are released here; their lease quads become `garbage`,
         deleted later by `collect` (not with the retraction: that is its cost).
         """
-        found: list[tuple[_Group, list[OxTriple]]] = []
-        count = 0
-        while count < budget and self.next_due() is not None and self._heap[0][0] <= now:
-            group = heapq.heappop(self._heap)[2]
-            triples = list(self._groups.pop(group, ()))
-            for t in triples:
+        found = self.pop_due(now, budget)
+        for group, _triples in found:
+            for t in self._groups.pop(group):
                 del self._held[group[0]][t]
                 self._discard(group[0], t, group)
-            found.append((group, [_triple(t) for t in triples]))
-            count += len(triples) + CHANGESET
         return found
 
     def pop_due(self, now: float, budget: int = BUDGET) -> list[tuple[_Group, list[OxTriple]]]:
