@@ -28,7 +28,7 @@ from space.reasoning import (
     read_triples,
     seminaive,
 )
-from space.reasoning.support import each
+from space.reasoning.support import add, each
 
 ROOT = Path(__file__).resolve().parents[1]
 EX = Namespace("http://example.org/")
@@ -72,7 +72,19 @@ def both(ontology, data=()) -> tuple[RuleEngine, RuleEngine]:
     assert set(bulk_delta.added) == set(incremental_delta.added)
     assert set(bulk_delta.inferred_added) == set(incremental_delta.inferred_added)
     assert not (bulk_delta.removed or bulk_delta.asserted_added or bulk_delta.asserted_removed)
+    assert_built_as_support_adds(bulk)
     return bulk, incremental
+
+
+def assert_built_as_support_adds(engine: RuleEngine) -> None:
+    """A bulk load inlines `support.add` (`seminaive._add`): each entry must be what
+    `add` builds from the same items (bare, list or set; no repeats), or the two drifted."""
+    for mapping in (engine._support.derivations, engine._support.dependents):
+        for key, held in mapping.items():
+            rebuilt: dict = {}
+            for item in each(held):
+                add(rebuilt, key, item)
+            assert type(rebuilt[key]) is type(held) and rebuilt[key] == held, key
 
 
 W3C = read_cases() if ALL.exists() else []

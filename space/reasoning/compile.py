@@ -16,7 +16,7 @@ from rdflib.term import Node
 
 from space.reasoning.builtins import Args, Builtin, Effect
 from space.reasoning.joins import Heads, Trigger
-from space.reasoning.rulecode import calls, code_of, shape
+from space.reasoning.rulecode import code_of, shape
 from space.reasoning.rules import Call, Functor, Pattern, Rule, Var
 from space.reasoning.terms import TermTable
 
@@ -109,7 +109,7 @@ class RuleIndex:
             rule=rule,
             label=rule.label,
             order=order,
-            production=any(not c.builtin.monotonic for c in calls(rule)),
+            production=code.production,
             heads=bind(code.heads),
             drops=_targets(heads, Effect.DROP, premise_of),
             removes=_targets(heads, Effect.REMOVE, premise_of),

@@ -72,14 +72,16 @@ def _misplaced(g: Graph) -> Iterator[str]:
     pairs = [*g.subject_objects(RDFS.subClassOf), *g.subject_objects(OWL.equivalentClass)]
     pairs += [(b, a) for a, b in g.subject_objects(OWL.equivalentClass)]
     for sub, sup in pairs:
-        for prop, what in _SUBCLASS_ONLY.items():
-            if isinstance(sup, BNode) and (sup, prop, None) in g:
-                where = f"as a superclass of {_name(g, sub)}"
-                yield f"{what} ({_name(g, sup)}) {where} is outside OWL 2 RL: ignored there"
-        for prop, what in _SUPERCLASS_ONLY.items():
-            if isinstance(sub, BNode) and (sub, prop, None) in g:
-                where = f"as a subclass of {_name(g, sup)}"
-                yield f"{what} ({_name(g, sub)}) {where} is outside OWL 2 RL: ignored there"
+        for side, anon, other, left_out in (
+            ("superclass", sup, sub, _SUBCLASS_ONLY),
+            ("subclass", sub, sup, _SUPERCLASS_ONLY),
+        ):
+            if not isinstance(anon, BNode):
+                continue
+            for prop, what in left_out.items():
+                if (anon, prop, None) in g:
+                    where = f"as a {side} of {_name(g, other)}"
+                    yield f"{what} ({_name(g, anon)}) {where} is outside OWL 2 RL: ignored there"
 
 
 def warn_outside_rl(g: Graph) -> list[str]:

@@ -31,10 +31,11 @@ class RuleCode:
     `triggers` has one join per body item a change can start from: each pattern,
     and the `noValue` (production rules) and `countLiteralValues` (backward rules)
     calls, which start joins on removals. `args` builds the arguments of each head
-    action and body guard, by item index.
+    action and body guard, by item index. A rule is `production` when a builtin
+    of it is not monotonic (the shape names each builtin's kind).
     """
 
-    slots: dict[Var, int]
+    production: bool
     triggers: dict[int, Factory]
     start: Factory | None
     heads: Factory
@@ -91,7 +92,7 @@ def code_of(rule: Rule, form: Shape) -> RuleCode:
     production = any(not c.builtin.monotonic for c in calls(rule))
     triggers = {i: compiler.trigger(i) for i in _seeds(rule, production)}
     code = RuleCode(
-        slots=slots,
+        production=production,
         triggers=triggers,
         start=None if any(isinstance(i, Pattern) for i in rule.body) else compiler.trigger(None),
         heads=compiler.heads(),

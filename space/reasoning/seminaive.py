@@ -28,7 +28,7 @@ from space.reasoning.delta import Delta
 from space.reasoning.joins import Match
 from space.reasoning.rules import Pattern
 from space.reasoning.support import Derivation, Entry
-from space.reasoning.triples import SMALL, T, _put
+from space.reasoning.triples import SMALL, T
 
 if TYPE_CHECKING:
     from space.reasoning.engine import RuleEngine
@@ -75,7 +75,7 @@ def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
     ones in their order, then each round's derivations.
     """
     store, asserted = engine._store, engine._asserted
-    triples, spo, pos, osp = store.triples, store.spo, store.pos, store.osp
+    add = store.add
     derivations: dict[T, Entry[Derivation]] = engine._support.derivations
     dependents: dict[T, Entry[T]] = engine._support.dependents
     starts = engine._index.starts
@@ -101,11 +101,8 @@ def _close(engine: RuleEngine, plus: list[T]) -> list[T]:
         canon.update(zip(delta, delta, strict=True))
         order.extend(delta)
         for t in delta:
-            triples.add(t)
+            add(t)
             s, p, o = t
-            _put(spo, s, p, o)
-            _put(pos, p, o, s)
-            _put(osp, o, s, p)
             for compiled, trigger in starts(p, o):
                 trigger(s, p, o, out)
                 if out:
