@@ -289,7 +289,7 @@ class Deployment:
 
     def _on_change(self) -> None:
         """Read the robots after each changeset, so the scenario and the log see every state."""
-        robots = read_robots(self.mirror.copy())
+        robots = read_robots(self.mirror.copy(), self.bad_values)
         self.view.robots(robots)
         if self.scenario is not None:
             self.scenario.observe(robots)
