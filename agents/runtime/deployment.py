@@ -341,9 +341,11 @@ class Deployment:
         if self.cluster is not None and self.cluster.line():
             header += f"\n{self.cluster.line()}"
         graph = self.mirror.copy()
+        # In log mode the robots are logged per change (`_on_change`), not from a frame.
+        logged = self.view.logs_every_change
         return Frame(
             header=header,
-            robots=read_robots(graph, self.bad_values),
+            robots=[] if logged else read_robots(graph, self.bad_values),
             firings=read_firings(self.mirror.recent(), FIRINGS_SHOWN, graph, self._said),
             processes=self.supervisor.status(),
             footer=self.scenario.progress if self.scenario else "Ctrl-C stops everything.",
