@@ -27,16 +27,12 @@ class InFlight:
         self._log = log
         self._unacked: deque[tuple[Changeset, Pending]] = deque()
 
-    def send(self, ts: TripleSpace, cs: Changeset) -> bool:
-        """Send `cs` without waiting; past `IN_FLIGHT` outstanding, read the oldest ones.
-
-        Returns:
-            True when an answer the store did not take was read (see `settle`).
+    def send(self, ts: TripleSpace, cs: Changeset) -> int:
+        """Send `cs` without waiting; return how many answers are outstanding past
+        `IN_FLIGHT`, the oldest ones the caller is to `settle` now.
         """
         self._unacked.append((cs, ts.send_later(cs, timeout=self._timeout)))
-        if len(self._unacked) > IN_FLIGHT:
-            return self.settle(ts, len(self._unacked) - IN_FLIGHT)
-        return False
+        return max(0, len(self._unacked) - IN_FLIGHT)
 
     def settle(self, ts: TripleSpace, count: int | None = None) -> bool:
         """Read the acknowledgements of `count` answers (all by default), oldest first.

@@ -314,9 +314,9 @@ class Reasoner(Agent):
         if wait:
             self.ts.send(cs, timeout=self.args.timeout)
             return
-        if self._in_flight.send(self.ts, cs):
-            self._diverged = True
-            self._resync()
+        excess = self._in_flight.send(self.ts, cs)
+        if excess:
+            self._settle(excess)
 
     def _settle(self, count: int | None = None) -> None:
         """Read the acknowledgements of `count` answers in flight (all by default), oldest first.

@@ -5,6 +5,8 @@ from __future__ import annotations
 import re
 import threading
 import time
+from collections.abc import Callable
+from typing import TypeVar
 
 import zenoh
 
@@ -17,6 +19,9 @@ from space.errors import (
     SpaceTimeout,
     SpaceUnavailable,
 )
+
+K = TypeVar("K")
+E = TypeVar("E", zenoh.Querier, zenoh.Publisher)
 
 
 class Queriers:
@@ -34,19 +39,20 @@ class Queriers:
 
     def __init__(self, session: zenoh.Session) -> None:
         self.session = session
-        self._declared: dict[tuple[str, float], zenoh.Querier] = {}
+        self._queriers: dict[tuple[str, float], zenoh.Querier] = {}
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._lock = threading.Lock()
         self._closed = False
 
     def put(self, key: str, payload: bytes) -> None:
         """Publish one fire-and-forget request on `key` (blocking while congested)."""
-        with self._lock:
-            publisher = self._publishers.get(key)
-            if publisher is None and len(self._publishers) < self.LIMIT and not self._closed:
-                publisher = self._publishers[key] = self.session.declare_publisher(
-                    key, congestion_control=zenoh.CongestionControl.BLOCK
-                )
+        publisher = self._declared(
+            self._publishers,
+            key,
+            lambda: self.session.declare_publisher(
+                key, congestion_control=zenoh.CongestionControl.BLOCK
+            ),
+        )
         if publisher is None:
             self.session.put(key, payload, congestion_control=zenoh.CongestionControl.BLOCK)
         else:
@@ -54,15 +60,16 @@ class Queriers:
 
     def get(self, key: str, payload: bytes, timeout: float) -> zenoh.Handler:
         """Send one request; return the handler its replies come in on."""
-        with self._lock:
-            querier = self._declared.get((key, timeout))
-            if querier is None and len(self._declared) < self.LIMIT and not self._closed:
-                querier = self._declared[(key, timeout)] = self.session.declare_querier(
-                    key,
-                    timeout=timeout,
-                    consolidation=zenoh.ConsolidationMode.NONE,
-                    congestion_control=zenoh.CongestionControl.BLOCK,
-                )
+        querier = self._declared(
+            self._queriers,
+            (key, timeout),
+            lambda: self.session.declare_querier(
+                key,
+                timeout=timeout,
+                consolidation=zenoh.ConsolidationMode.NONE,
+                congestion_control=zenoh.CongestionControl.BLOCK,
+            ),
+        )
         if querier is None:
             return _get(self.session, key, payload, timeout)
         return querier.get(payload=payload)
@@ -70,10 +77,18 @@ class Queriers:
     def close(self) -> None:
         """Undeclare everything (before the session closes); later requests are plain ones."""
         with self._lock:
-            declared = [*self._declared.values(), *self._publishers.values()]
-            self._declared, self._publishers, self._closed = {}, {}, True
+            declared = [*self._queriers.values(), *self._publishers.values()]
+            self._queriers, self._publishers, self._closed = {}, {}, True
         for entity in declared:
             entity.undeclare()
+
+    def _declared(self, table: dict[K, E], key: K, declare: Callable[[], E]) -> E | None:
+        """Return `table`'s entity for `key`, declaring it if there is room (None: ask plainly)."""
+        with self._lock:
+            entity = table.get(key)
+            if entity is None and len(table) < self.LIMIT and not self._closed:
+                entity = table[key] = declare()
+            return entity
 
 
 Asker = zenoh.Session | Queriers  # what a request goes out through

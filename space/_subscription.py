@@ -261,13 +261,10 @@ class Dispatcher:
         held = 0.0  # when delivery started waiting for more parts
         while True:
             try:
-                first = self._queue.get(timeout=HOLD if held else None)
+                batch = [self._queue.get(timeout=HOLD if held else None)]
             except queue.Empty:
-                first = False  # no more parts came: deliver
-            batch = [first] if first is not False else []
-            while (
-                batch and len(batch) < _BATCH
-            ):  # what is queued already is handled, then delivered
+                batch = []  # no more parts came: deliver
+            while batch and len(batch) < _BATCH:  # what is queued already is handled, delivered
                 try:
                     batch.append(self._queue.get_nowait())
                 except queue.Empty:

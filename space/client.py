@@ -103,8 +103,8 @@ class TripleSpace(Reads, Watching):
         with ExitStack() as steps:  # run in reverse: subscriptions first, the session last
             if self._owns_session:
                 steps.callback(self.session.close)
+            steps.callback(self._queriers.close)  # after the dispatcher, whose fetches use them
             steps.callback(self._dispatcher.close)
-            steps.callback(self._queriers.close)
             for watchdog in watchdogs:
                 steps.callback(watchdog.undeclare)
             for sub in subscriptions:

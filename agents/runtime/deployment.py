@@ -289,7 +289,7 @@ class Deployment:
 
     def _on_change(self) -> None:
         """Read the robots after each changeset, so the scenario and the log see every state."""
-        robots = read_robots(self.mirror.copy())
+        robots = read_robots(self.mirror.copy(), self.bad_values)
         self.view.robots(robots)
         if self.scenario is not None:
             self.scenario.observe(robots)
@@ -341,9 +341,11 @@ class Deployment:
         if self.cluster is not None and self.cluster.line():
             header += f"\n{self.cluster.line()}"
         graph = self.mirror.copy()
+        # In log mode the robots are logged per change (`_on_change`), not from a frame.
+        logged = self.view.logs_every_change
         return Frame(
             header=header,
-            robots=read_robots(graph, self.bad_values),
+            robots=[] if logged else read_robots(graph, self.bad_values),
             firings=read_firings(self.mirror.recent(), FIRINGS_SHOWN, graph, self._said),
             processes=self.supervisor.status(),
             footer=self.scenario.progress if self.scenario else "Ctrl-C stops everything.",

@@ -8,6 +8,7 @@ One reading of the vocabulary (docs/vocabulary.md) shared by the live view of
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
@@ -101,13 +102,16 @@ class BadValues:
     def __init__(self, report: Callable[[str], None]) -> None:
         self._report = report
         self._seen: set[Triple] = set()
+        self._lock = threading.Lock()  # `tspace up` reads robots on two threads
 
     def __call__(self, triple: Triple, expected: str) -> None:
         """Report `triple` unless it was already; `expected` says what the value should be."""
-        if triple not in self._seen:
+        with self._lock:
+            if triple in self._seen:
+                return
             self._seen.add(triple)
-            s, p, o = triple
-            self._report(f"{short(s)} {short(p)} {str(o)!r} is not {expected}; shown as unknown")
+        s, p, o = triple
+        self._report(f"{short(s)} {short(p)} {str(o)!r} is not {expected}; shown as unknown")
 
 
 def short(term: Node) -> str:
