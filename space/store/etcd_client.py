@@ -133,14 +133,21 @@ class EtcdClient:
         return reply.ID
 
     async def reachable(self) -> int:
-        """Return how many members answer a status request within PROBE_TIMEOUT."""
+        """Return how many members answer a status request within PROBE_TIMEOUT.
+
+        A member that misses the first probe gets a second one: the first call
+        on an idle channel also connects it, which a loaded host can make take
+        longer than the probe, and a live member must not be counted as gone.
+        """
 
         async def probe(i: int) -> bool:
-            try:
-                await self._maint[i].Status(rpc.StatusRequest(), timeout=PROBE_TIMEOUT)
-                return True
-            except grpc.aio.AioRpcError:
-                return False
+            for _ in range(2):
+                try:
+                    await self._maint[i].Status(rpc.StatusRequest(), timeout=PROBE_TIMEOUT)
+                    return True
+                except grpc.aio.AioRpcError:
+                    continue
+            return False
 
         return sum(await asyncio.gather(*(probe(i) for i in range(len(self.endpoints)))))
 
