@@ -65,8 +65,9 @@ class Handle:
         return key
 
     def _ask(self, request: dict, timeout: float, stale: bool | None = None) -> dict:
-        # The store gives up a little before the caller does, so the caller hears why.
-        request["limit"] = max(0.05, timeout - max(0.1, min(1.0, timeout * 0.1)))
+        # The store gives up a little before the caller does, so the caller hears why: a
+        # tenth of the timeout, at least 0.25 s (its answer crossing a loaded host) and at most 1.
+        request["limit"] = max(0.05, timeout - max(0.25, min(1.0, timeout * 0.1)))
         if self.stale if stale is None else stale:
             request["stale"] = True  # see docs/wire-format.md
         return ask_store(self._queriers, self._key("query"), pack(request), timeout, what="query")
