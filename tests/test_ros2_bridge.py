@@ -386,10 +386,13 @@ def test_the_graph_sees_the_robots_nodes_and_topics(server, standin):
     with zenoh.open(client_config(server.endpoint)) as session:
         graph = Graph().open(session, 0)
         try:
-            wait_for(lambda: "/robot1/microphone" in graph.nodes(), 20, "the robot's nodes")
-            assert {"/robot1/robot_driver", "/robot1/screen", "/robot1/controller_server"} <= set(
-                graph.nodes()
-            )
+            # the stand-in's entities arrive one liveliness token at a time: wait for the last
+            nodes = {"/robot1/microphone", "/robot1/robot_driver", "/robot1/screen"}
+            nodes.add("/robot1/controller_server")
+            wait_for(lambda: nodes <= set(graph.nodes()), 20, "the robot's nodes")
+            wait_for(lambda: graph.offers(EntityKind.SERVICE, "/robot1/screen/change_state"), 20)
+            wanted = {"/robot1/battery_state", "/robot1/speed_limit"}
+            wait_for(lambda: wanted <= graph.topics().keys(), 20, "the robot's topics")
             topics = graph.topics()
             assert topics["/robot1/battery_state"] == {"sensor_msgs/msg/BatteryState"}
             assert topics["/robot1/speed_limit"] == {"nav2_msgs/msg/SpeedLimit"}

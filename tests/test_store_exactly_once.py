@@ -44,6 +44,7 @@ def test_takes_survive_store_kills_with_none_lost_and_none_taken_twice(tmp_path)
     edge.start(wait=False)
     store = Server(tmp_path / "data", "--connect", edge.endpoint)
     store.start()
+    wait_for(edge.reachable, 20, "the store through the edge router")
     try:
         for round_ in range(ROUNDS):
             space = f"once{round_}"
@@ -81,6 +82,7 @@ def test_writes_retried_across_store_kills_are_applied_once(tmp_path):
     edge.start(wait=False)
     store = Server(tmp_path / "data", "--connect", edge.endpoint)
     store.start()
+    wait_for(edge.reachable, 20, "the store through the edge router")
     acked: list[str] = []
     try:
         with TripleSpace.open(edge.endpoint, space="w") as ts:
