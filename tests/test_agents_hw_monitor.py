@@ -118,7 +118,7 @@ def test_malformed_commands_are_skipped_and_the_agent_keeps_working(robot, launc
     robot.write([(AC.robot1_speakers, AC.running_mode, Literal("stand-by"))])
     wait_for(lambda: value(robot, AC.robot1_speakers, AC.actual_mode) == Literal("stand-by"))
     assert agent.alive()
-    assert "ignoring unknown mode 'asleep'" in agent.logs()
+    wait_for(lambda: "ignoring unknown mode 'asleep'" in agent.logs(), 10, "the warning")
 
 
 def test_kill_9_then_restart_rebuilds_the_battery_from_the_space(robot, launch):

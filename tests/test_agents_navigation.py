@@ -138,7 +138,8 @@ def test_a_visit_postponed_for_taking_too_long_is_taken_up_again_for_the_same_pa
     assert state(robot, AC.target_place) == AC.room_101
     assert state(robot, AC.waiting_for, AC.patient_ane) is None
     assert state(robot, AC.postponed_task) is None
-    assert "taking up the postponed AttendingPatient for patient_ane" in behavior.logs()
+    taking_up = "taking up the postponed AttendingPatient for patient_ane"
+    wait_for(lambda: taking_up in behavior.logs(), 10, "the behaviour's line")
 
 
 def test_a_postponement_whose_parts_arrive_apart_is_kept(robot, launch):

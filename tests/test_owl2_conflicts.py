@@ -33,7 +33,7 @@ def test_a_device_put_on_stand_by_while_in_use_is_a_conflict_until_its_user_leav
         clashing.add((s, p, o))
     assert (screen, RDF.type, AC.StandbyDevice) in clashing
     assert (screen, RDF.type, AC.DeviceInUse) in clashing
-    assert "conflict" in agent.logs() and "cax-dw" in agent.logs()
+    wait_for(lambda: "conflict" in agent.logs() and "cax-dw" in agent.logs(), 10, "the log line")
     # Nothing was lost, and the reasoner goes on answering.
     assert value(ts, screen, AC.running_mode) == Literal("stand-by")
     ts.write([(AC.robot1_laser, AC.obstacles, Literal("surrounded"))])

@@ -144,7 +144,7 @@ def test_an_unanswered_lifecycle_call_is_reported_then_retried(space, launch, st
     standin("--managed", "microphone", "--unmanaged")
     wait_for(lambda: mode(space, "robot1_microphone") == "active", 20, "microphone", proc.logs)
     assert value(space, AC.robot1_microphone, AC.ros_status) == Literal("ok")
-    assert "managed node /robot1/microphone is up" in proc.logs()
+    wait_for(lambda: "managed node /robot1/microphone is up" in proc.logs(), 10, "the log line")
     # SIGTERM: the drivers stop, the node leaves the graph, the process exits cleanly.
     assert proc.stop() == 0
 
@@ -242,7 +242,8 @@ def test_malformed_cdr_and_unknown_types_are_logged_and_skipped(space, launch, s
         # Its attachment is not rmw_zenoh's 33 bytes: said once, the message still taken.
         session.put(BATTERY_KEY, good, attachment=b"\x01\x02")
         wait_for(lambda: value(space, AC.robot1_battery, AC.charge_percent) == Literal(30), 10)
-        assert "expected 33 (an older rmw_zenoh?); messages still taken" in proc.logs()
+        said = "expected 33 (an older rmw_zenoh?); messages still taken"
+        wait_for(lambda: said in proc.logs(), 10, "the attachment's line")
     assert proc.alive()
 
 
