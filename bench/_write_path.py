@@ -1,0 +1,125 @@
+"""Child process of space_bench's `--write-path`: the store's own time for a write, in-process.
+
+Run from the tree under test (PYTHONPATH), it drives that tree's writer (`space.store.writer`)
+as the server's worker thread does, with no Zenoh hop and no thread hand-off: decode and check,
+decide, commit (Oxigraph on disk), publish on a session with a subscriber on `@/changes`.
+Two cases, into a space already holding 100,000 inferred triples:
+
+- `one triple`: a sensor's write, one triple of one of 10 subjects (space_bench's latency
+  write), as the store sees it: the store's share of write -> notification;
+- `200 replaced`: the reasoner's answer when 200 rules fire, 200 inferred values removed and
+  200 added (issue 13's "+200 rules all firing"), whole path and `StoreDB.commit` alone.
+
+Prints one JSON object: median microseconds of each.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import sys
+import tempfile
+import time
+import uuid
+from collections.abc import Callable
+from pathlib import Path
+
+import pyoxigraph as ox
+import zenoh
+
+import space.store.db as db_module
+from space.changeset import WIRE_VERSION, pack
+from space.store.server import StoreServer
+from space.store.writer import Request, Writer
+
+INT = "http://www.w3.org/2001/XMLSchema#integer"
+
+
+def _timed(f: Callable, calls: list[float]) -> Callable:
+    """Return `f` noting the seconds of each call in `calls`."""
+
+    def timed(*args: object, **kwargs: object) -> object:
+        start = time.perf_counter()
+        try:
+            return f(*args, **kwargs)
+        finally:
+            calls.append(time.perf_counter() - start)
+
+    return timed
+
+
+def main(rounds: int) -> None:
+    conf = zenoh.Config()
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    commits: list[float] = []
+    db_module.StoreDB.commit = _timed(db_module.StoreDB.commit, commits)  # type: ignore[method-assign]
+    with (
+        zenoh.open(conf) as session,
+        tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as data,
+    ):
+        server = StoreServer(session, Path(data))
+        server._db = db = db_module.StoreDB(Path(data))
+        writer = Writer(
+            session,
+            db,
+            spaces=server._spaces,
+            space=server._space,
+            publisher=server._publisher,
+            max_spaces=10,
+            leases=server._leases,
+        )
+        g = "<urn:tspace:graph:w:inferred>"
+        db.store.load(
+            "".join(
+                f'<urn:b:s{i // 10}> <urn:b:p{i % 10}> "{i}"^^<{INT}> {g} .\n'
+                for i in range(100_000)
+            ),
+            format=ox.RdfFormat.N_QUADS,
+        )
+        db.store.flush()
+        db.store.optimize()  # the load's compactions done before the clock runs
+        subscriber = session.declare_subscriber("tspace/w/@/changes", lambda _s: None)
+
+        def write(wire: dict) -> float:
+            wire.update(v=WIRE_VERSION, id=uuid.uuid4().hex, agent="bench")
+            wire["ts"] = str(session.new_timestamp())
+            start = time.perf_counter()
+            pending: list = []
+            writer.write(Request("write", "w", pack(wire), None, "tspace/w/@/write"), pending)
+            writer.commit(pending)
+            return time.perf_counter() - start
+
+        def value(i: int) -> str:
+            return f'"{time.monotonic_ns() + i}"^^<{INT}>'
+
+        one = [
+            write({"add": [[f"<urn:bench:s{i % 10}>", "<urn:bench:t>", value(0)]]})
+            for i in range(rounds * 10)
+        ]
+        old: list[list[str]] = []
+        whole = []
+        commits.clear()
+        for _ in range(rounds + 1):
+            new = [["<urn:b:base>", f"<urn:b:setting_{k}>", value(k)] for k in range(200)]
+            whole.append(write({"iadd": new, "idel": old}))
+            old = new
+        subscriber.undeclare()
+        server._publisher.close()
+        db.close()
+    print(
+        json.dumps(
+            {
+                "one triple, whole write (us)": _median_us(one[rounds:]),
+                "200 replaced, whole write (us)": _median_us(whole[1:]),
+                "200 replaced, StoreDB.commit (us)": _median_us(commits[1:]),
+            }
+        )
+    )
+
+
+def _median_us(values: list[float]) -> float:
+    return statistics.median(values) * 1e6
+
+
+if __name__ == "__main__":
+    main(int(sys.argv[1]) if len(sys.argv) > 1 else 50)
