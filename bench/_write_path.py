@@ -8,7 +8,11 @@ Two cases, into a space already holding 100,000 inferred triples:
 - `one triple`: a sensor's write, one triple of one of 10 subjects (space_bench's latency
   write), as the store sees it: the store's share of write -> notification;
 - `200 replaced`: the reasoner's answer when 200 rules fire, 200 inferred values removed and
-  200 added (issue 13's "+200 rules all firing"), whole path and `StoreDB.commit` alone.
+  200 added (issue 13's "+200 rules all firing"), whole path and `StoreDB.commit` alone;
+- `bulk`: 200,000 new triples in changesets of 10,000, as `tspace write` of a big file
+  sends them (10 triples a subject, space_bench's document): CPU microseconds a triple of
+  the writer thread (decoding and checking, deciding, committing) and of the whole process
+  (RocksDB's background threads too), and triples a second.
 
 Prints one JSON object: median microseconds of each.
 """
@@ -28,22 +32,25 @@ import pyoxigraph as ox
 import zenoh
 
 import space.store.db as db_module
+import space.store.writer as writer_module
 from space.changeset import WIRE_VERSION, pack
+from space.store import intake
 from space.store.server import StoreServer
 from space.store.writer import Request, Writer
 
 INT = "http://www.w3.org/2001/XMLSchema#integer"
+BULK = 200_000  # triples of the bulk case
 
 
-def _timed(f: Callable, calls: list[float]) -> Callable:
-    """Return `f` noting the seconds of each call in `calls`."""
+def _timed(f: Callable, calls: list[float], clock: Callable = time.perf_counter) -> Callable:
+    """Return `f` noting the seconds (of `clock`) of each call in `calls`."""
 
     def timed(*args: object, **kwargs: object) -> object:
-        start = time.perf_counter()
+        start = clock()
         try:
             return f(*args, **kwargs)
         finally:
-            calls.append(time.perf_counter() - start)
+            calls.append(clock() - start)
 
     return timed
 
@@ -52,7 +59,8 @@ def main(rounds: int) -> None:
     conf = zenoh.Config()
     conf.insert_json5("scouting/multicast/enabled", "false")
     commits: list[float] = []
-    db_module.StoreDB.commit = _timed(db_module.StoreDB.commit, commits)  # type: ignore[method-assign]
+    committing = db_module.StoreDB.commit
+    db_module.StoreDB.commit = _timed(committing, commits)  # type: ignore[method-assign]
     with (
         zenoh.open(conf) as session,
         tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as data,
@@ -103,18 +111,62 @@ def main(rounds: int) -> None:
             new = [["<urn:b:base>", f"<urn:b:setting_{k}>", value(k)] for k in range(200)]
             whole.append(write({"iadd": new, "idel": old}))
             old = new
+        figures = {
+            "one triple, whole write (us)": _median_us(one[rounds:]),
+            "200 replaced, whole write (us)": _median_us(whole[1:]),
+            "200 replaced, StoreDB.commit (us)": _median_us(commits[1:]),
+        }
+        commits.clear()
+        decoding: list[float] = []
+        writer_module.intake.write_request = _timed(  # type: ignore[attr-defined]
+            intake.write_request, decoding, time.thread_time
+        )
+        db_module.StoreDB.commit = _timed(committing, commits, time.thread_time)  # type: ignore[method-assign]
+        wall, cpu, thread = time.perf_counter(), time.process_time(), time.thread_time()
+        for first in range(0, BULK, 10_000):
+            rows = [row for i in range(first // 10, first // 10 + 1000) for row in _bulk_rows(i)]
+            wire = {"v": WIRE_VERSION, "id": uuid.uuid4().hex, "agent": "bulk", "add": rows}
+            pending = []
+            writer.write(Request("write", "bulk", pack(wire), None, "tspace/bulk/@/write"), pending)
+            writer.commit(pending)
+        wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+        thread = time.thread_time() - thread
+        writer_module.intake.write_request = intake.write_request  # type: ignore[attr-defined]
+        per = 1e6 / BULK
+        figures.update(
+            {
+                "bulk: writer thread, decode and check (us CPU/triple)": sum(decoding) * per,
+                "bulk: writer thread, decide (us CPU/triple)": (
+                    thread - sum(decoding) - sum(commits)
+                )
+                * per,
+                "bulk: writer thread, commit (us CPU/triple)": sum(commits) * per,
+                "bulk: whole process (us CPU/triple)": cpu * per,
+                "bulk: in-process rate (triples/s)": BULK / wall,
+            }
+        )
         subscriber.undeclare()
         server._publisher.close()
         db.close()
-    print(
-        json.dumps(
-            {
-                "one triple, whole write (us)": _median_us(one[rounds:]),
-                "200 replaced, whole write (us)": _median_us(whole[1:]),
-                "200 replaced, StoreDB.commit (us)": _median_us(commits[1:]),
-            }
-        )
-    )
+    print(json.dumps(figures))
+
+
+def _bulk_rows(i: int) -> list[list[str]]:
+    """Return the 10 triples of subject `i` of space_bench's bulk document, as N-Triples."""
+    b, x = f"<urn:bench:b{i}>", "http://www.w3.org/2001/XMLSchema#"
+    objects = [
+        f'"{i}"^^<{x}integer>',
+        f'"v{i}"',
+        f"<urn:bench:k{i % 9}>",
+        f'"{i % 3}"^^<{x}integer>',
+        f'"{i}x"',
+        f"<urn:bench:c{i % 5}>",
+        f'"{i}.5"^^<{x}decimal>',
+        '"e"',
+        "<urn:bench:f1>",
+        f'"{i * 2}"^^<{x}integer>',
+    ]
+    return [[b, f"<urn:bench:{p}>", o] for p, o in zip("nskabcdefg", objects, strict=True)]
 
 
 def _median_us(values: list[float]) -> float:
