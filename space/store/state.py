@@ -10,7 +10,6 @@ what it decides is an `Entry` the server commits.
 
 from __future__ import annotations
 
-from collections import Counter
 from dataclasses import dataclass
 
 import pyoxigraph as ox
@@ -178,7 +177,9 @@ class SpaceState:
         lookup of the subject spares those of a new one's rows. A subject of one
         row is looked up by that row alone (a sensor's write: one lookup, not two).
         """
-        count = Counter(row[0] for row in rows)
+        count: dict[str, int] = {}
+        for row in rows:
+            count[row[0]] = count.get(row[0], 0) + 1
         known = {
             s: n == 1
             or s in self._plain_subjects
