@@ -26,9 +26,9 @@ from functools import lru_cache
 
 import pyoxigraph as ox
 
-from space.store import oxterms
 from space.store.oxterms import OxTriple
 
+NQUADS = ox.RdfFormat.N_QUADS
 FORMAT = "2"  # 1 was SQLite (space.sqlite3)
 ROOT = "urn:tspace:"
 META = ox.NamedNode(ROOT + "meta")
@@ -112,9 +112,8 @@ def log_rows(
 def log_quads(
     space: str, seq: int, request: str, payload: bytes, dropped: bytes = b""
 ) -> list[ox.Quad]:
-    """Return the quads of one log entry (`log_rows` as terms)."""
-    g = log_graph(space)
-    return [
-        ox.Quad(*oxterms.triple(list(row)), g)
-        for row in log_rows(space, seq, request, payload, dropped)
-    ]
+    """Return the quads of one log entry (`log_rows` read by Oxigraph's parser, which takes a
+    payload of any length)."""
+    g = log_graph(space).value
+    rows = log_rows(space, seq, request, payload, dropped)
+    return list(ox.parse("".join(f"{s} {p} {o} <{g}> .\n" for s, p, o in rows), format=NQUADS))
