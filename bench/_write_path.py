@@ -14,6 +14,13 @@ Two cases, into a space already holding 100,000 inferred triples:
   the writer thread (decoding and checking, deciding, committing) and of the whole process
   (RocksDB's background threads too), and triples a second.
 
+- `served`: the store served as `tspace serve` serves it (a router session, the worker
+  thread, Zenoh's callbacks), with space_bench's latency writer and subscriber processes
+  (1,000 acked one-triple writes): medians of the writer thread's decoding and deciding
+  (`Writer.write`), its commit and its put on `@/changes` for each write, and write ->
+  notification as the subscriber saw it. The same code as `one triple`, with the other
+  threads and processes beside it.
+
 Prints one JSON object: median microseconds of each.
 """
 
@@ -21,6 +28,7 @@ from __future__ import annotations
 
 import json
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -30,16 +38,20 @@ from pathlib import Path
 
 import pyoxigraph as ox
 import zenoh
+from _harness import free_port
 
 import space.store.db as db_module
 import space.store.writer as writer_module
 from space.changeset import WIRE_VERSION, pack
 from space.store import intake
+from space.store.publish import Publisher
 from space.store.server import StoreServer
 from space.store.writer import Request, Writer
+from space.zconfig import make_config
 
 INT = "http://www.w3.org/2001/XMLSchema#integer"
 BULK = 200_000  # triples of the bulk case
+_COMMIT = db_module.StoreDB.commit  # as the module defines it, before it is timed
 
 
 def _timed(f: Callable, calls: list[float], clock: Callable = time.perf_counter) -> Callable:
@@ -148,7 +160,59 @@ def main(rounds: int) -> None:
         subscriber.undeclare()
         server._publisher.close()
         db.close()
+    figures.update(served(1000))
     print(json.dumps(figures))
+
+
+def served(count: int) -> dict[str, float]:
+    """Return the medians of a served one-triple write's stages (see the module's doc)."""
+    stages: dict[str, list[float]] = {"write": [], "commit": [], "put": []}
+    writer_module.Writer.write = _timed(writer_module.Writer.write, stages["write"])  # type: ignore[method-assign]
+    db_module.StoreDB.commit = _timed(_COMMIT, stages["commit"])  # type: ignore[method-assign]
+    streams = Publisher._stream
+
+    def stream(self: Publisher, space: str, service: str) -> object:
+        publisher = streams(self, space, service)
+        return _TimedPut(publisher, stages["put"]) if service == "changes" else publisher
+
+    Publisher._stream = stream  # type: ignore[method-assign,assignment]
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    child = [sys.executable, str(Path(__file__).parent / "_latency_subscriber.py")]
+    with (
+        zenoh.open(make_config(mode="router", listen=[endpoint])) as session,
+        tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as data,
+    ):
+        server = StoreServer(session, Path(data))
+        server.start()
+        try:
+            sub = subprocess.Popen(
+                [*child, "subscribe", endpoint, "lat"], stdout=subprocess.PIPE, text=True
+            )
+            assert sub.stdout is not None and sub.stdout.readline().strip() == "ready"
+            subprocess.run([*child, "write", endpoint, "lat", str(count)], check=True)
+            delays = [int(x) / 1e6 for x in sub.stdout.readline().split()]
+            sub.wait(timeout=10)
+        finally:
+            server.close()
+    return {
+        "served: decode and decide, Writer.write (us)": _median_us(stages["write"]),
+        "served: StoreDB.commit (us)": _median_us(stages["commit"]),
+        "served: put on @/changes (us)": _median_us(stages["put"]),
+        "served: write -> notification p50 (ms)": statistics.median(delays),
+    }
+
+
+class _TimedPut:
+    """A publisher whose puts are timed."""
+
+    def __init__(self, publisher: zenoh.Publisher, calls: list[float]) -> None:
+        self._publisher = publisher
+        self._calls = calls
+
+    def put(self, payload: bytes) -> None:
+        start = time.perf_counter()
+        self._publisher.put(payload)
+        self._calls.append(time.perf_counter() - start)
 
 
 def _bulk_rows(i: int) -> list[list[str]]:
