@@ -14,7 +14,15 @@ Run: python bench/floors.py [--runs 3] [--million]
    `--million` adds 1M triples into a fresh store, 10,000 a commit with the
    store's background flush every 50,000 triples (what `tspace write` of 1M
    costs Oxigraph), and the same in one `bulk_load`.
-2. Zenoh: a writer's GET to a queryable in a router process that hands it to
+2. A changeset with removals, as the reasoner's answer when 200 rules fire: 200 values
+   of one subject removed and 200 added, into a named graph already holding 100,000
+   triples, written the ways pyoxigraph 0.5 allows: one SPARQL UPDATE (DELETE DATA then
+   INSERT DATA, what the store commits; with and without a 60 KB literal as its log
+   entry's payload), the same update again when it changes nothing (the parse and
+   Oxigraph's lookups alone), and two ways that are not atomic, to tell the parts apart:
+   DELETE DATA then `load` of the additions, and `remove` of each quad then `extend`.
+   Milliseconds of wall time and of CPU per changeset.
+3. Zenoh: a writer's GET to a queryable in a router process that hands it to
    a thread (as the store's callbacks do), which replies and puts a sample that
    a subscriber process receives: p50/p99 from the GET to the subscriber's
    callback, with no storing, checking or decoding at all.
@@ -37,6 +45,7 @@ import zenoh
 from _harness import free_port, median, percentile, print_table
 
 GRAPH = "urn:tspace:graph:floor:asserted"
+NQ = ox.RdfFormat.N_QUADS
 
 
 WAYS = {  # name -> (method, graph: named or default, on disk, triples a call)
@@ -68,6 +77,68 @@ def oxigraph(method: str, named: bool, disk: bool, batch: int, total: int) -> tu
         wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
         del write, store  # closes the database before its directory goes
     return total / wall, total / cpu
+
+
+CHANGESET = {  # name -> how a changeset of 200 removed + 200 added is written
+    "UPDATE, DELETE DATA + INSERT DATA (the store's commit)": "update",
+    "the same, + a 60 KB literal (its log entry's payload)": "update+payload",
+    "the same UPDATE again: nothing changes (parse, lookups)": "again",
+    "DELETE DATA, then load of the additions (not atomic)": "delete+load",
+    "remove() of each, then extend (not atomic, 201 commits)": "remove+extend",
+}
+
+
+def changesets(rounds: int) -> dict[str, tuple[float, float]]:
+    """Return each way's (ms of wall time, ms of CPU) per changeset of 200 values replaced,
+    into a store already holding 100,000 triples; the ways interleaved round by round."""
+    times: dict[str, list[tuple[float, float]]] = {}
+    payload = '"' + "A" * 60_000 + '"'
+    g = f"<{GRAPH}>"
+    with tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as d:
+        store = ox.Store(d)
+        store.load(_doc(0, 100_000), format=ox.RdfFormat.N_QUADS)
+        store.flush()
+        store.optimize()  # the load's compactions done before the clock runs
+        value, last = 0, ""
+
+        def rows(v: int) -> list[str]:
+            xsd = "http://www.w3.org/2001/XMLSchema#integer"
+            return [f'<urn:floor:base> <urn:floor:set{k}> "{v + k}"^^<{xsd}>' for k in range(200)]
+
+        store.load("".join(f"{r} {g} .\n" for r in rows(0)), format=NQ)
+        for _ in range(rounds):
+            for name, way in CHANGESET.items():
+                old, new = rows(value), rows(value + 1000)
+                log = f"GRAPH <urn:floor:log> {{ <urn:floor:e{value}> <urn:floor:p> {payload} }}"
+                text = (
+                    f"DELETE DATA {{ GRAPH {g} {{ {' . '.join(old)} }} }} ;\n"
+                    f"INSERT DATA {{ GRAPH {g} {{ {' . '.join(new)} }} "
+                    f"{log if way == 'update+payload' else ''} }}"
+                )
+                additions = "".join(f"{r} {g} .\n" for r in new)
+                gone = list(ox.parse("".join(f"{r} {g} .\n" for r in old), format=NQ))
+                added = list(ox.parse(additions, format=NQ))
+                if way == "again":  # the previous way's update, applied once more
+                    text = last
+                wall, cpu = time.perf_counter(), time.process_time()
+                if way.startswith("update") or way == "again":
+                    store.update(text)
+                elif way == "delete+load":
+                    store.update(text.split(" ;\n")[0])
+                    store.load(additions, format=NQ)
+                else:
+                    for quad in gone:
+                        store.remove(quad)
+                    store.extend(added)
+                wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+                times.setdefault(name, []).append((wall * 1000, cpu * 1000))
+                if way != "again":
+                    value += 1000
+                last = text
+        del store
+    return {
+        name: (median([w for w, _ in v]), median([c for _, c in v])) for name, v in times.items()
+    }
 
 
 def million(bulk: bool) -> tuple[float, float]:
@@ -177,9 +248,13 @@ def main() -> None:
     parser.add_argument("--count", type=int, default=1000, help="GETs per Zenoh run")
     parser.add_argument("--million", action="store_true", help="also 1M into a fresh store")
     parser.add_argument("--plot", type=Path, help="write a PNG of triples per CPU-second here")
+    parser.add_argument(
+        "--changesets", type=int, default=20, help="rounds of the changeset-with-removals ways"
+    )
     args = parser.parse_args()
     rows: dict[str, list[tuple[float, float]]] = {}
     zenoh_rows: dict[str, list[float]] = {}
+    changeset_rows: dict[str, list[tuple[float, float]]] = {}
     for _ in range(args.runs):
         for name, (method, named, disk, batch) in WAYS.items():
             total = 32_000 if batch < 10_000 else 100_000
@@ -189,6 +264,8 @@ def main() -> None:
                 million(bulk=False)
             )
             rows.setdefault("1M into a fresh store, one bulk_load", []).append(million(bulk=True))
+        for name, (wall, cpu) in changesets(args.changesets).items():
+            changeset_rows.setdefault(name, []).append((wall, cpu))
         p50, p99 = zenoh_hop(args.count)
         zenoh_rows.setdefault("Zenoh GET -> thread -> put -> subscriber p50 (ms)", []).append(p50)
         zenoh_rows.setdefault("Zenoh GET -> thread -> put -> subscriber p99 (ms)", []).append(p99)
@@ -203,6 +280,16 @@ def main() -> None:
     )
     if args.plot is not None:
         plot({name: median([v[1] for v in values]) for name, values in rows.items()}, args.plot)
+    table = [
+        (name, median([w for w, _ in v]), median([c for _, c in v]), _range([c for _, c in v], 2))
+        for name, v in changeset_rows.items()
+    ]
+    print_table(
+        f"A changeset of 200 values replaced, into 100,000 triples (pyoxigraph {ox.__version__}), "
+        f"medians of {args.runs} runs of {args.changesets}",
+        ["way of writing", "wall ms", "CPU ms", "CPU ms min..max"],
+        table,
+    )
     table = [(m, median(v), f"{min(v):.3f}..{max(v):.3f}") for m, v in zenoh_rows.items()]
     print_table(
         f"Zenoh alone, medians of {args.runs} runs", ["measure", "median", "min..max"], table
@@ -228,8 +315,8 @@ def plot(per_cpu: dict[str, float], path: Path) -> None:
     print(f"plot: {path}")
 
 
-def _range(values: list[float]) -> str:
-    return f"{min(values):,.0f}..{max(values):,.0f}"
+def _range(values: list[float], digits: int = 0) -> str:
+    return f"{min(values):,.{digits}f}..{max(values):,.{digits}f}"
 
 
 if __name__ == "__main__":

@@ -6,6 +6,8 @@ measures the server from that tree and from this one, interleaved; the latency's
 subscriber run from the same tree as the server (the client's path is part of that figure),
 the other clients are this tree's (the wire format is compatible both ways), so the rest of
 the difference is the store's. `--latency-only`: only the write -> notification latency.
+`--write-path`: only the store's own time for a write, in-process, in each tree
+(`_write_path.py`: a one-triple write; 200 inferred values replaced, and its commit alone).
 Every figure is a median over runs; the store, the subscriber and the writer
 are separate processes talking through the router on loopback.
 """
@@ -13,6 +15,7 @@ are separate processes talking through the router on loopback.
 from __future__ import annotations
 
 import argparse
+import json
 import subprocess
 import sys
 import time
@@ -120,14 +123,13 @@ def query_10k(endpoint: str, space: str) -> tuple[float, float]:
 def measure(endpoint: str, pid: int, code: Path | None, run: int, args) -> dict[str, float]:
     """Return every figure of one run against one server."""
     rows: dict[str, float] = {}
-    if args.million:
-        if code is None:  # the old `tspace write` sends one changeset, refused above 100,000
-            used = store.cpu_seconds(pid)
-            rows["tspace write of 1,000,000 triples, fresh store (triples/s)"] = store.bulk_write(
-                endpoint, code, 1_000_000
-            )
-            rows["store CPU for them (us/triple)"] = store.cpu_seconds(pid) - used
-            rows["store RSS holding those 1,000,000 triples (MB)"] = store.rss_mb(pid)
+    if args.million:  # a tree whose `tspace write` sends one changeset fails: 0 triples/s
+        used = store.cpu_seconds(pid)
+        rows["tspace write of 1,000,000 triples, fresh store (triples/s)"] = store.bulk_write(
+            endpoint, code, 1_000_000
+        )
+        rows["store CPU for them (us/triple)"] = store.cpu_seconds(pid) - used
+        rows["store RSS holding those 1,000,000 triples (MB)"] = store.rss_mb(pid)
         return rows
     p50, p99 = latency(endpoint, f"lat{run}", args.count, nowait=False, code=code)
     rows["latency write()->notify p50 (ms)"] = p50
@@ -173,6 +175,13 @@ def measure(endpoint: str, pid: int, code: Path | None, run: int, args) -> dict[
     return rows
 
 
+def write_path(code: Path | None) -> dict[str, float]:
+    """Return the store's own microseconds for a write, in-process, run from `code`."""
+    child = [sys.executable, str(BENCH / "_write_path.py"), "30"]
+    out = subprocess.run(child, capture_output=True, text=True, check=True, env=code_env(code))
+    return json.loads(out.stdout)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--runs", type=int, default=5)
@@ -191,12 +200,16 @@ def main() -> None:
     parser.add_argument(
         "--million",
         action="store_true",
-        help="only `tspace write` of 1,000,000 triples into a fresh store, and its RSS then "
-        "(the new tree only)",
+        help="only `tspace write` of 1,000,000 triples into a fresh store, and its RSS then",
     )
     parser.add_argument("--plot", type=Path, help="write a PNG of new vs old here")
     parser.add_argument(
         "--latency-only", action="store_true", help="only the write -> notification latency"
+    )
+    parser.add_argument(
+        "--write-path",
+        action="store_true",
+        help="only the store's own time for a write, in-process, no Zenoh hop (_write_path.py)",
     )
     args = parser.parse_args()
     codes: dict[str, Path | None] = {"new": None}
@@ -205,6 +218,10 @@ def main() -> None:
     results: dict[str, dict[str, list[float]]] = {name: {} for name in codes}
     for run in range(args.runs):
         for name, code in codes.items():  # interleaved, so that the machine's moods hit both
+            if args.write_path:
+                for measure_name, value in write_path(code).items():
+                    results[name].setdefault(measure_name, []).append(value)
+                continue
             with serve_process(code) as (endpoint, pid):
                 for measure_name, value in measure(endpoint, pid, code, run, args).items():
                     results[name].setdefault(measure_name, []).append(value)

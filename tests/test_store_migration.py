@@ -45,7 +45,11 @@ def _old_dir(data: Path) -> None:
     conn.executemany("INSERT INTO triples VALUES ('old', ?, ?, ?, ?, ?)", rows)
     conn.execute("INSERT INTO prefixes VALUES ('old', 'ac', ?)", (AC_NS,))
     for seq in (1, 2, 3):
-        payload = msgpack.packb({"v": 1, "id": f"cs{seq}", "agent": "a", "ts": TS, "seq": seq})
+        wire = {"v": 1, "id": f"cs{seq}", "agent": "a", "ts": TS, "seq": seq}
+        if seq == 3:  # a log entry longer than any one term, its id to be escaped
+            wire["id"] = 'cs"3\n'
+            wire["add"] = [[f"<{AC_NS}d{i}>", f"<{AC_NS}name>", f'"{i:050}"'] for i in range(400)]
+        payload = msgpack.packb(wire)
         conn.execute("INSERT INTO log VALUES ('old', ?, ?)", (seq, payload))
     conn.commit()
     conn.close()
@@ -63,7 +67,9 @@ def test_an_old_data_directory_is_migrated_with_its_state_log_and_seq(tmp_path: 
             assert len(graph) == 4
             assert len(ts.query("?b ac:battery_level 'low'")) == 1  # prefixes came along
             assert len(ts.query(None, graph="inferred")) == 1
-            assert [Changeset.decode(p).id for p in ts._fetch_log(1, 3)[0]] == ["cs1", "cs2", "cs3"]
+            logged = [Changeset.decode(p) for p in ts._fetch_log(1, 3)[0]]
+            assert [c.id for c in logged] == ["cs1", "cs2", 'cs"3\n']
+            assert len(logged[2].added) == 400
             # the functional property and its timestamp came along: an older value loses
             ack = ts.send(ts.changeset([(AC.b1, AC.battery_level, Literal("high"))]))
             assert ack.seq == 4 and ack.dropped == []

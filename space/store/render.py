@@ -26,9 +26,12 @@ from space.store.db_layout import (
     Entry,
     graph,
     log_graph,
-    log_quads,
+    log_rows,
     space_node,
 )
+
+Row = tuple[str, str, str]
+_SEQ, _PREFIX, _META = f"<{SEQ.value}>", f"<{PREFIX.value}>", f"<{META.value}>"
 
 
 def plain(entries: list[Entry]) -> bool:
@@ -51,11 +54,12 @@ def nquads(entries: list[Entry], extra: list[ox.Quad] = ()) -> str:  # type: ign
     (leases) with them."""
     parts: list[str] = [f"{q} .\n" for q in extra]
     for e in entries:
-        if e.plain:
-            g = f" <{graph(e.space, 't').value}> .\n"
-            parts.append("".join([f"{s} {p} {o}{g}" for s, p, o in e.plain]))
-        parts.extend(f"{q} .\n" for q in _meta(e))
-        parts.extend(f"{q} .\n" for q in log_quads(e.space, e.seq, e.request, e.payload, e.dropped))
+        for g, rows in (
+            (f"<{graph(e.space, 't').value}>", e.plain),
+            (_META, _meta(e)),
+            (f"<{log_graph(e.space).value}>", _logged(e)),
+        ):
+            parts.extend([f"{s} {p} {o} {g} .\n" for s, p, o in rows])
     return "".join(parts)
 
 
@@ -111,21 +115,25 @@ def _removals(e: Entry) -> list[tuple[str, Iterable]]:
 
 
 def _additions(e: Entry, *, seq: bool) -> list[tuple[str, Iterable]]:
-    meta = [q.triple for q in _meta(e)]
-    logged = [q.triple for q in log_quads(e.space, e.seq, e.request, e.payload, e.dropped)]
+    meta = _meta(e)
     t = f"<{graph(e.space, 't').value}>"
     return [
         (t, e.added),
         (t, e.plain),
         (f"<{graph(e.space, 'i').value}>", e.inferred_added),
         (f"<{graph(e.space, 'stamps').value}>", e.stamps_added),
-        (f"<{META.value}>", meta if seq else meta[1:]),
-        (f"<{log_graph(e.space).value}>", logged),
+        (_META, meta if seq else meta[1:]),
+        (f"<{log_graph(e.space).value}>", _logged(e)),
     ]
 
 
-def _meta(e: Entry) -> list[ox.Quad]:
-    node = space_node(e.space)
-    quads = [ox.Quad(node, SEQ, ox.Literal(str(e.seq), datatype=INT), META)]
-    quads += [ox.Quad(node, PREFIX, ox.Literal(f"{n} {ns}"), META) for n, ns in e.prefixes.items()]
-    return quads
+def _meta(e: Entry) -> list[Row]:
+    """Return an entry's rows in the `meta` graph: the space's seq, then its new prefixes."""
+    node = f"<{space_node(e.space).value}>"
+    rows = [(node, _SEQ, f'"{e.seq}"^^<{INT.value}>')]
+    rows += [(node, _PREFIX, str(ox.Literal(f"{n} {ns}"))) for n, ns in e.prefixes.items()]
+    return rows
+
+
+def _logged(e: Entry) -> list[Row]:
+    return log_rows(e.space, e.seq, e.request, e.payload, e.dropped)

@@ -51,6 +51,7 @@ class SpaceState:
         self.prefixes = PrefixMap(loaded.prefixes)
         self._stamps = loaded.stamps
         self._functional = loaded.functional
+        self._functional_texts: set[str] | None = None  # their N-Triples, made when asked
         self._overlay: dict[tuple[str, OxTriple], bool] = {}
         self._pending_objects: dict[tuple[OxTerm, OxTerm], set[OxTerm]] = {}
         self._refresh_functional = False
@@ -66,6 +67,7 @@ class SpaceState:
         self._plain_subjects.clear()
         if self._refresh_functional:
             self._functional = self.db.functional(self.name)
+            self._functional_texts = None
             self._refresh_functional = False
 
     def takes_plain(self, req: WriteRequest) -> bool:
@@ -87,7 +89,9 @@ class SpaceState:
             row[1] == _TYPE_TEXT and row[2] == _FUNCTIONAL_TEXT for row in req.plain
         ):
             return False
-        return not predicates & {oxterms.text(p) for p in self._functional}
+        if self._functional_texts is None:
+            self._functional_texts = {oxterms.text(p) for p in self._functional}
+        return not predicates & self._functional_texts
 
     @property
     def pending_plain(self) -> bool:
@@ -167,10 +171,20 @@ class SpaceState:
         return self._ordered(req, entry, [new, [], [], []], stamp)
 
     def _new_rows(self, rows: list[Row]) -> list[Row]:
-        """Return the rows neither in the database nor added earlier in the batch; note them."""
+        """Return the rows neither in the database nor added earlier in the batch; note them.
+
+        A subject's rows are looked up one by one only if the subject is known: one
+        lookup of the subject spares those of a new one's rows. A subject of one
+        row is looked up by that row alone (a sensor's write: one lookup, not two).
+        """
+        count: dict[str, int] = {}
+        for row in rows:
+            count[row[0]] = count.get(row[0], 0) + 1
         known = {
-            s: s in self._plain_subjects or self.db.has_subject(self.name, oxterms.term(s))
-            for s in {row[0] for row in rows}
+            s: n == 1
+            or s in self._plain_subjects
+            or self.db.has_subject(self.name, oxterms.term(s))
+            for s, n in count.items()
         }
         new = [
             row
@@ -217,6 +231,7 @@ class SpaceState:
             if t[1] == _TYPE and t[2] == _FUNCTIONAL_CLASS:
                 self._refresh_functional = True
                 self._functional.add(t[0])
+                self._functional_texts = None
         for s, p, _o in entry.removed:
             old = self._stamps.pop((s, p), None)
             if old is not None:
