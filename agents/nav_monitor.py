@@ -66,7 +66,7 @@ class NavMonitor(Agent):
     def _map(self) -> dict[URIRef, tuple[float, float]]:
         """Return the places of the map (read every tick: the map may be written late)."""
         places = {}
-        for place in self.view.graph.subjects(AC.map_x, None):
+        for place in self.view.subjects(AC.map_x):
             x, y = self.view.number(place, AC.map_x), self.view.number(place, AC.map_y)
             if isinstance(place, URIRef) and x is not None and y is not None:
                 places[place] = (x, y)

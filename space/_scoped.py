@@ -25,7 +25,7 @@ from rdflib import BNode, Literal, URIRef
 from space import keys
 from space._parts import Part, split, term_chunk
 from space._subscription import BURST, LATEST, Callback, Change, Dispatcher, Fetch, Subscription
-from space.changeset import Changeset, published_seq, unpack
+from space.changeset import published_seq, unpack
 from space.errors import InputError, MalformedPayload, SpaceError
 from space.prefixes import PrefixMap
 from space.template import Template
@@ -176,7 +176,7 @@ class ScopedSubscription(Subscription):
         if self.skip_agent is not None and wire.get("agent") == self.skip_agent:
             return []
         try:
-            change = self.filter(Changeset.from_wire(wire, published=True))
+            change = self.filter(Change.from_wire(wire, published=True))
         except MalformedPayload as exc:
             log.warning("malformed change skipped: %s", exc)
             return []
