@@ -48,6 +48,24 @@ def split(wire: Mapping) -> dict[PartKey, Part]:
     return parts
 
 
+def joined(parts: list[Part]) -> Part:
+    """Return the parts of one changeset as one map: the first one's header, every one's triples.
+
+    Raises:
+        MalformedPayload: a part's triple list is not a list.
+    """
+    merged = {name: value for name, value in parts[0].items() if name not in LISTS}
+    for part in parts:
+        for name in LISTS:
+            listed = part.get(name)
+            if not listed:
+                continue
+            if not isinstance(listed, list):
+                raise MalformedPayload(f"'{name}' must be a list of triples")
+            merged.setdefault(name, []).extend(listed)
+    return merged
+
+
 def chunks(triple: object) -> PartKey:
     """Return the key chunks of a wire triple's subject and predicate (their escaped text).
 
