@@ -19,7 +19,7 @@ from rdflib.term import Node
 from space.changeset import LISTS
 from space.errors import MalformedPayload
 from space.keys import escape
-from space.terms import to_nt
+from space.terms import CACHED, to_nt
 
 HEADER = ("v", "id", "agent", "ts", "cause", "seq", "lifespan")  # repeated in every part
 
@@ -40,12 +40,33 @@ def split(wire: Mapping) -> dict[PartKey, Part]:
         if not isinstance(listed, list):
             raise MalformedPayload(f"'{name}' must be a list of triples")
         for triple in listed:
-            key = chunks(triple)
+            if (
+                not isinstance(triple, list | tuple)
+                or len(triple) != 3
+                or not isinstance(triple[0], str)
+                or not isinstance(triple[1], str)
+            ):
+                chunks(triple)  # raises, saying what is wrong
+            key = (_chunk(triple[0]), _chunk(triple[1]))
             part = parts.get(key)
             if part is None:
                 part = parts[key] = dict(header)
             part.setdefault(name, []).append(triple)
     return parts
+
+
+_CHUNKS: dict[str, str] = {}  # a term's text -> its key chunk
+
+
+def _chunk(text: str) -> str:
+    """Return `escape(text)`, each text escaped once: a changeset's keys repeat their terms
+    (one subject for 200 settings), and escaping was most of the store's cutting."""
+    found = _CHUNKS.get(text)
+    if found is None:
+        if len(_CHUNKS) >= CACHED:
+            _CHUNKS.clear()
+        found = _CHUNKS[text] = escape(text)
+    return found
 
 
 def joined(parts: list[Part]) -> Part:
