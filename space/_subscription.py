@@ -274,12 +274,11 @@ class Dispatcher:
         out: list[tuple[Subscription, object]] = []  # what `receive` returned, to deliver
         held = 0.0  # when delivery started waiting for more parts
         while True:
-            if held:
-                time.sleep(HOLD)  # the burst's next parts pile up: one wake-up for many
-                batch = []
-            else:
-                batch = [self._queue.get()]
-            while len(batch) < _BATCH:  # what is queued already is handled, delivered
+            try:
+                batch = [self._queue.get(timeout=HOLD if held else None)]
+            except queue.Empty:
+                batch = []  # no more parts came: deliver
+            while batch and len(batch) < _BATCH:  # what is queued already is handled, delivered
                 try:
                     batch.append(self._queue.get_nowait())
                 except queue.Empty:
