@@ -13,6 +13,7 @@ change when the space learns a prefix later. See docs/wire-format.md.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from functools import lru_cache
 
 from rdflib.term import Node
 
@@ -55,18 +56,9 @@ def split(wire: Mapping) -> dict[PartKey, Part]:
     return parts
 
 
-_CHUNKS: dict[str, str] = {}  # a term's text -> its key chunk
-
-
-def _chunk(text: str) -> str:
-    """Return `escape(text)`, each text escaped once: a changeset's keys repeat their terms
-    (one subject for 200 settings), and escaping was most of the store's cutting."""
-    found = _CHUNKS.get(text)
-    if found is None:
-        if len(_CHUNKS) >= CACHED:
-            _CHUNKS.clear()
-        found = _CHUNKS[text] = escape(text)
-    return found
+# A term's key chunk, each text escaped once: a changeset's keys repeat their terms (one
+# subject for 200 settings), and escaping was most of the store's cutting.
+_chunk = lru_cache(maxsize=CACHED)(escape)
 
 
 def joined(parts: list[Part]) -> Part:
