@@ -308,7 +308,7 @@ class Agent:
                 self.log.warning("renewal %s not taken: %s", failed.id, failed.error)
                 continue
             self.log.warning("write %s not taken, undone in the view: %s", failed.id, failed.error)
-            if all(t in self.view.graph for t in failed.added):
+            if all(t in self.view for t in failed.added):
                 self.view.remove(failed.added)
                 self.view.add(failed.removed)
 

@@ -75,7 +75,7 @@ class Behavior(Agent):
 
     def _waiting(self) -> URIRef | None:
         """Return a person waiting for a task this robot postponed (the first by name)."""
-        people = sorted(self.view.graph.subjects(AC.postponed_by, self.robot))
+        people = self.view.subjects(AC.postponed_by, self.robot)
         return next((p for p in people if isinstance(p, URIRef)), None)
 
     def _situation(self, waiting: URIRef | None) -> Situation:
@@ -112,7 +112,7 @@ class Behavior(Agent):
         elif (
             person is not None
             and (plan.task, person) != self._serving
-            and (person, AC.postponed_by, robot) in self.view.graph
+            and (person, AC.postponed_by, robot) in self.view
         ):
             # Served again, so no longer waiting; only when the service begins: this scoped
             # agent receives a postponement in parts, the person's maybe a tick before the
@@ -160,9 +160,9 @@ class Behavior(Agent):
         v, robot = self.view, self.robot
         others = {
             t
-            for p in v.graph.subjects(AC.postponed_by, robot)
+            for p in v.subjects(AC.postponed_by, robot)
             if p != person
-            for t in v.graph.objects(p, AC.waiting_for)
+            for t in v.objects(p, AC.waiting_for)
         }
         values: dict[tuple[Node, Node], Node | None] = {
             (person, AC.waiting_for): None,

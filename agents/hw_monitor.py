@@ -14,13 +14,13 @@ import argparse
 import random
 import sys
 
-from rdflib import Literal, URIRef
+from rdflib import URIRef
 from rdflib.term import Node
 
 from agents.base import Agent, run_agent
 from agents.sim.battery import CHARGE_RATE, DEFAULT_LEVELS, Battery, level_of, middle_of
 from agents.sim.devices import FAULTS, MODES, SWITCH_DELAY, Driver, drain, obstacles_seen
-from agents.vocabulary import AC
+from agents.vocabulary import AC, literal
 from space import Change
 
 
@@ -183,19 +183,19 @@ class HwMonitor(Agent):
         """Return every state this monitor reports, as the space should hold it."""
         values: dict[tuple[Node, Node], Node | None] = {}
         for device, driver in self.drivers.items():
-            values[(device, AC.actual_mode)] = Literal(driver.mode)
-            values[(device, AC.fault)] = Literal(driver.fault)
+            values[(device, AC.actual_mode)] = literal(driver.mode)
+            values[(device, AC.fault)] = literal(driver.fault)
         battery = self.view.device(self.robot, AC.Battery)
         if battery is not None:
             levels = self.view.levels(AC.BatteryLevel, AC.below_percent) or DEFAULT_LEVELS
             level = level_of(self.battery.percent, levels, charging=self.battery.charging)
-            values[(battery, AC.battery_level)] = Literal(level)
-            values[(battery, AC.charge_percent)] = Literal(self.battery.reported_percent())
+            values[(battery, AC.battery_level)] = literal(level)
+            values[(battery, AC.charge_percent)] = literal(self.battery.reported_percent())
         for laser in self.view.devices(self.robot, AC.LaserScanner):
             place = self.view.value(self.robot, AC.location)
             seen = obstacles_seen(self.view.text(place, AC.crowd_level), self.drivers[laser].mode)
             if seen is not None:
-                values[(laser, AC.obstacles)] = Literal(seen)
+                values[(laser, AC.obstacles)] = literal(seen)
         return values
 
 

@@ -21,14 +21,14 @@ from rdflib.term import Node
 
 from agents.base import Agent, run_agent
 from agents.sim.base import DEFAULT_SPEEDS, Base, nearest
-from agents.vocabulary import AC
+from agents.vocabulary import AC, literal
 
 POSITION_GRID = 0.5
 
 
 def _metres(value: float) -> Literal:
     """Return a position as an xsd:decimal, on a grid coarse enough not to flood the space."""
-    return Literal(Decimal(f"{round(value / POSITION_GRID) * POSITION_GRID:.1f}"))
+    return literal(Decimal(f"{round(value / POSITION_GRID) * POSITION_GRID:.1f}"))
 
 
 class NavMonitor(Agent):
@@ -66,7 +66,7 @@ class NavMonitor(Agent):
     def _map(self) -> dict[URIRef, tuple[float, float]]:
         """Return the places of the map (read every tick: the map may be written late)."""
         places = {}
-        for place in self.view.graph.subjects(AC.map_x, None):
+        for place in self.view.subjects(AC.map_x):
             x, y = self.view.number(place, AC.map_x), self.view.number(place, AC.map_y)
             if isinstance(place, URIRef) and x is not None and y is not None:
                 places[place] = (x, y)
@@ -124,7 +124,7 @@ class NavMonitor(Agent):
 
     def _readings(self) -> dict[tuple[Node, Node], Node | None]:
         values: dict[tuple[Node, Node], Node | None] = {
-            (self.robot, AC.navigation_status): Literal(self.base.status),
+            (self.robot, AC.navigation_status): literal(self.base.status),
             (self.robot, AC.position_x): _metres(self.base.x),
             (self.robot, AC.position_y): _metres(self.base.y),
         }
@@ -133,8 +133,8 @@ class NavMonitor(Agent):
             values[(self.robot, AC.location)] = URIRef(place)
         base = self.view.device(self.robot, AC.MobileBase)
         if base is not None:
-            values[(base, AC.actual_speed)] = Literal(Decimal(f"{self.base.speed:.2f}"))
-            values[(base, AC.speed_limit)] = Literal(Decimal(f"{self.base.max_speed:.2f}"))
+            values[(base, AC.actual_speed)] = literal(Decimal(f"{self.base.speed:.2f}"))
+            values[(base, AC.speed_limit)] = literal(Decimal(f"{self.base.max_speed:.2f}"))
         return values
 
 

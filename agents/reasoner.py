@@ -285,7 +285,8 @@ class Reasoner(Agent):
                 list(now - inferred_before),
                 list(inferred_before - now),
             )
-        added, removed = list(delta.asserted_added), list(delta.asserted_removed)
+        concluded = list(delta.asserted_added), list(delta.asserted_removed)
+        added, removed = list(concluded[0]), list(concluded[1])
         robots: dict[Node, bool] = {}
         for firing in delta.firings:
             new, old = self.firings.record(
@@ -310,7 +311,7 @@ class Reasoner(Agent):
             inferred_removed=inferred_removed,
             cause=cause,
         )
-        self.writers.note(cs)
+        self.writers.note(cs, *concluded)  # not the records: `why` is never asked about them
         if wait:
             self.ts.send(cs, timeout=self.args.timeout)
             return

@@ -60,7 +60,7 @@ class View(SpaceMirror):
 
     def task_of_type(self, task_type: str) -> URIRef | None:
         """Return the task individual whose `ac:type` is `task_type`, or None."""
-        for task in sorted(self.graph.subjects(AC.type, Literal(task_type))):
+        for task in self.subjects(AC.type, Literal(task_type)):
             if isinstance(task, URIRef):
                 return task
         return None
@@ -68,7 +68,7 @@ class View(SpaceMirror):
     def levels(self, cls: Node, measure: Node) -> dict[str, float]:
         """Return the integrator's levels of a class: level literal -> its measure."""
         found = {}
-        for level in self.graph.subjects(RDF.type, cls):
+        for level in self.subjects(RDF.type, cls):
             name, amount = self.text(level, AC.level), self.number(level, measure)
             if name is not None and amount is not None:
                 found[name] = amount

@@ -40,6 +40,13 @@ class BulkMemory(SimpleMemory):
         """Return the objects of (s, p), unsorted."""
         return list(self._spo.get(s, _EMPTY).get(p, _EMPTY))
 
+    def subjects_of(self, p: Node, o: Node | None) -> list[Node]:
+        """Return the subjects of (p, o), or of p with any object when `o` is None; unsorted."""
+        by_object = self._pos.get(p, _EMPTY)
+        if o is not None:
+            return list(by_object.get(o, _EMPTY))
+        return list(dict.fromkeys(s for subjects in by_object.values() for s in subjects))
+
     def update(self, removed: Iterable[Triple] = (), added: Iterable[Triple] = ()) -> None:
         """Remove triples (absent ones are ignored), then add triples."""
         discard, put = self.discard, self.put

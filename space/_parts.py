@@ -13,13 +13,14 @@ change when the space learns a prefix later. See docs/wire-format.md.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from functools import lru_cache
 
 from rdflib.term import Node
 
 from space.changeset import LISTS
 from space.errors import MalformedPayload
 from space.keys import escape
-from space.terms import to_nt
+from space.terms import CACHED, to_nt
 
 HEADER = ("v", "id", "agent", "ts", "cause", "seq", "lifespan")  # repeated in every part
 
@@ -40,12 +41,42 @@ def split(wire: Mapping) -> dict[PartKey, Part]:
         if not isinstance(listed, list):
             raise MalformedPayload(f"'{name}' must be a list of triples")
         for triple in listed:
-            key = chunks(triple)
+            if (
+                not isinstance(triple, list | tuple)
+                or len(triple) != 3
+                or not isinstance(triple[0], str)
+                or not isinstance(triple[1], str)
+            ):
+                chunks(triple)  # raises, saying what is wrong
+            key = (_chunk(triple[0]), _chunk(triple[1]))
             part = parts.get(key)
             if part is None:
                 part = parts[key] = dict(header)
             part.setdefault(name, []).append(triple)
     return parts
+
+
+# A term's key chunk, each text escaped once: a changeset's keys repeat their terms (one
+# subject for 200 settings), and escaping was most of the store's cutting.
+_chunk = lru_cache(maxsize=CACHED)(escape)
+
+
+def joined(parts: list[Part]) -> Part:
+    """Return the parts of one changeset as one map: the first one's header, every one's triples.
+
+    Raises:
+        MalformedPayload: a part's triple list is not a list.
+    """
+    merged = {name: value for name, value in parts[0].items() if name not in LISTS}
+    for part in parts:
+        for name in LISTS:
+            listed = part.get(name)
+            if not listed:
+                continue
+            if not isinstance(listed, list):
+                raise MalformedPayload(f"'{name}' must be a list of triples")
+            merged.setdefault(name, []).extend(listed)
+    return merged
 
 
 def chunks(triple: object) -> PartKey:

@@ -18,14 +18,15 @@ The heartbeat does not (it says the space moved, not whether its keys did).
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 
 import zenoh
 from rdflib import BNode, Literal, URIRef
 
 from space import keys
-from space._parts import Part, split, term_chunk
+from space._parts import Part, joined, split, term_chunk
 from space._subscription import BURST, LATEST, Callback, Change, Dispatcher, Fetch, Subscription
-from space.changeset import Changeset, published_seq, unpack
+from space.changeset import published_seq, unpack
 from space.errors import InputError, MalformedPayload, SpaceError
 from space.prefixes import PrefixMap
 from space.template import Template
@@ -86,8 +87,39 @@ class ScopedSubscription(Subscription):
         """Note the store's seq the subscription starts from."""
         self.horizon = max(self.horizon, seq)
 
-    def receive(self, item: object, fetch: Fetch) -> list[Change]:
-        """Return the changes to deliver for a received part, the missed ones first.
+    def merge(self, into: object, item: object) -> bool:
+        """Fold parts of one changeset received together into one delivery."""
+        if not (isinstance(into, Received) and isinstance(item, Received)):
+            return False
+        if into.seq != item.seq or into.id != item.id:
+            return False
+        into.parts += item.parts
+        return True
+
+    def change(self, item: object) -> Change | None:
+        """Parse the parts of one delivery at once (a part with a malformed term is left out)."""
+        if not isinstance(item, Received):
+            return item  # type: ignore[return-value]  # the snapshot, parsed already
+        try:
+            return self._parsed(joined(item.parts))
+        except MalformedPayload:
+            good = [part for part in item.parts if self._parses(part)]
+            return self._parsed(joined(good)) if good else None
+
+    def _parsed(self, wire: Part) -> Change | None:
+        return self.filter(Change.from_wire(wire, published=True))
+
+    @staticmethod
+    def _parses(part: Part) -> bool:
+        try:
+            Change.from_wire(part, published=True)
+        except MalformedPayload as exc:
+            log.warning("malformed change skipped: %s", exc)
+            return False
+        return True
+
+    def receive(self, item: object, fetch: Fetch) -> list[Received]:
+        """Return what to deliver for a received part, the missed parts first.
 
         Raises:
             MalformedPayload: not a published part (no id, seq or `prev`).
@@ -104,7 +136,7 @@ class ScopedSubscription(Subscription):
         known = max(self.last_seq, self._last.get(key, 0))
         if seq <= known:
             return []
-        changes: list[Change] = []
+        changes: list[Received] = []
         if prev > known or seq > self.horizon + SLACK:
             try:
                 changes = self._fetch(seq - 1, fetch)
@@ -119,7 +151,7 @@ class ScopedSubscription(Subscription):
         self._last[key] = seq
         return changes + self._changes(wire)
 
-    def behind(self, seq: int, fetch: Fetch) -> list[Change]:
+    def behind(self, seq: int, fetch: Fetch) -> list[Received]:
         """Fetch the log to now on a reconnection or a new leader (`LATEST`); ignore heartbeats."""
         if seq != LATEST:
             return []
@@ -129,7 +161,7 @@ class ScopedSubscription(Subscription):
             log.warning("could not fetch changes after %d: %s", self.last_seq, exc)
             return []
 
-    def _fetch(self, last: int, fetch: Fetch) -> list[Change]:
+    def _fetch(self, last: int, fetch: Fetch) -> list[Received]:
         """Deliver the selected parts logged after `last_seq`, up to `last`, not delivered yet.
 
         Raises:
@@ -139,7 +171,7 @@ class ScopedSubscription(Subscription):
             return []
         payloads, now = fetch(self.last_seq + 1, last)
         self.horizon = max(self.horizon, now)
-        changes: list[Change] = []
+        changes: list[Received] = []
         for payload in payloads:
             try:
                 wire = unpack(payload)
@@ -159,28 +191,28 @@ class ScopedSubscription(Subscription):
 
     def _kept(self, parts: dict[tuple[str, str], Part], seq: int) -> Part | None:
         """Return the selected parts of one logged changeset not delivered yet, merged."""
-        merged: Part | None = None
+        kept = []
         for (s, p), part in parts.items():
             key = keys.part_key(self.space, s, p)
             if seq <= self._last.get(key, 0) or not self._selects(key):
                 continue
             self._last[key] = seq
-            if merged is None:
-                merged = {k: v for k, v in part.items() if not isinstance(v, list)}
-            for name, listed in part.items():
-                if isinstance(listed, list):
-                    merged.setdefault(name, []).extend(listed)
-        return merged
+            kept.append(part)
+        return joined(kept) if kept else None
 
-    def _changes(self, wire: Part) -> list[Change]:
+    def _changes(self, wire: Part) -> list[Received]:
         if self.skip_agent is not None and wire.get("agent") == self.skip_agent:
             return []
-        try:
-            change = self.filter(Changeset.from_wire(wire, published=True))
-        except MalformedPayload as exc:
-            log.warning("malformed change skipped: %s", exc)
-            return []
-        return [] if change is None else [change]
+        return [Received(wire["seq"], wire["id"], [wire])]
+
+
+@dataclass
+class Received:
+    """Parts of one changeset received together: their terms are parsed once, when delivered."""
+
+    seq: int
+    id: str
+    parts: list[Part]
 
 
 def selector_key(space: str, selector: str) -> str:

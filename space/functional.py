@@ -15,10 +15,12 @@ from rdflib.term import Node
 
 from space.terms import Triple
 
+_TYPE, _FUNCTIONAL = RDF.type, OWL.FunctionalProperty  # looked up once: each is Python code
+
 
 def declares_functional(triple: Triple) -> bool:
     """Return True if `triple` is `p rdf:type owl:FunctionalProperty`."""
-    return triple[1] == RDF.type and triple[2] == OWL.FunctionalProperty
+    return triple[1] == _TYPE and triple[2] == _FUNCTIONAL
 
 
 @dataclass

@@ -82,7 +82,9 @@ class SpaceMirror:
         history: how many recent changesets to remember for `recent` (attached only).
 
     Attributes:
-        graph: the live union graph; read it only from the thread that applies changes.
+        graph: the live union graph (rdflib, for SPARQL and serialising); read it only
+            from the thread that applies changes. The lookups below read the same
+            indexes without rdflib's generic pattern search, microseconds each.
     """
 
     def __init__(
@@ -213,11 +215,17 @@ class SpaceMirror:
         """Return True if the copy declares `predicate` an owl:FunctionalProperty."""
         return predicate in self._functional
 
+    def __contains__(self, triple: Triple) -> bool:
+        return self._store.has(triple)
+
     def value(self, subject: Node | None, predicate: Node) -> Node | None:
         """Return one object of (subject, predicate) (the least, for determinism), or None."""
         if subject is None:
             return None
-        return next(iter(sorted(self.graph.objects(subject, predicate))), None)
+        found = self._store.objects_of(subject, predicate)
+        if len(found) < 2:
+            return found[0] if found else None
+        return min(found)
 
     def text(self, subject: Node | None, predicate: Node) -> str | None:
         """Return the lexical form of one object of (subject, predicate), or None."""
@@ -236,8 +244,12 @@ class SpaceMirror:
 
     def objects(self, subject: Node, predicate: Node) -> list[Node]:
         """Return the objects of (subject, predicate), sorted for determinism."""
-        return sorted(self.graph.objects(subject, predicate))
+        return sorted(self._store.objects_of(subject, predicate))
+
+    def subjects(self, predicate: Node, obj: Node | None = None) -> list[Node]:
+        """Return the subjects of (predicate, obj), of any object when `obj` is None; sorted."""
+        return sorted(self._store.subjects_of(predicate, obj))
 
     def has_type(self, subject: Node, cls: Node) -> bool:
         """Return True if `subject rdf:type cls` is in the copy."""
-        return (subject, RDF.type, cls) in self.graph
+        return self._store.has((subject, RDF.type, cls))

@@ -258,3 +258,35 @@ def test_a_robots_hw_monitor_hears_its_robot_and_the_site_not_the_fleet_nor_reco
         [(AC.hall, AC.crowd_level, Literal("high"))],
         [level(1, "low")],
     ]
+
+
+def test_a_malformed_part_costs_only_itself_not_the_parts_delivered_with_it(caplog):
+    # The parts of one changeset received together are parsed once, at delivery: a bad
+    # term in one of them must still leave the others' triples delivered.
+    from space._parts import split
+    from space._scoped import ScopedSubscription
+    from space._subscription import Dispatcher
+    from space.template import Template
+
+    good = [[f"<{AC_NS}robot1_battery>", f"<{AC_NS}battery_level>", '"low"']]
+    bad = [[f"<{AC_NS}robot1>", f"<{AC_NS}location>", '"unterminated']]
+    wire = {"v": 1, "id": "c1", "agent": "w", "ts": "1/x", "seq": 1, "add": good + bad}
+    sub = ScopedSubscription(
+        Dispatcher(lambda first, last: ([], 0)),
+        Template.of(None),
+        lambda change: None,
+        space="s",
+        selectors=["*/*"],
+    )
+    sub.start(1)
+    queued: list = []
+    for (s, p), part in split(wire).items():
+        part |= {"prev": 0, "n": 2}
+        for item in sub.receive((f"tspace/s/@/changes/{s}/{p}", pack(part)), None):
+            if not (queued and sub.merge(queued[-1], item)):
+                queued.append(item)
+    assert len(queued) == 1  # one delivery for both parts
+    with caplog.at_level(logging.WARNING, logger="tspace.subscription"):
+        change = sub.change(queued[0])
+    assert change is not None and change.added == [level(1, "low")]
+    assert "malformed change skipped" in caplog.text
