@@ -215,7 +215,8 @@ def test_a_write_the_store_is_too_busy_to_acknowledge_says_it_may_still_be_appli
 ):
     big = tmp_path / "big.ttl"
     big.write_text("".join(f"<urn:s{i}> <urn:p> {i} .\n" for i in range(20_000)))
-    out = run_tspace("write", str(big), "--timeout", "0.05")  # the store needs ~0.5 s for it
+    # the store needs ~0.5 s for it; naming the space, the write is the command's one request
+    out = run_tspace("write", str(big), "--space", "default", "--timeout", "0.05")
     assert out.returncode == 1
     assert out.stdout == ""
     assert out.stderr == (

@@ -82,7 +82,7 @@ def open_space(args: argparse.Namespace, agent: str, *, create: bool = False) ->
     The store says which spaces it holds: with no `--space`, the one it holds
     (the one `tspace up` runs) is used, 'default' if it holds none; a space it
     does not hold is an error naming those it does, unless `create` (a write
-    makes a new space).
+    makes a new space, and one naming its space asks nothing first).
 
     With `--secure`, as `--identity` (default: the operator); a secure store answers
     only its own keys, so there `--space` is taken as given ('default' if none).
@@ -111,7 +111,10 @@ def open_space(args: argparse.Namespace, agent: str, *, create: bool = False) ->
         )
     session = open_session(args.connect, config_file=args.config)
     try:
-        name = pick_space(args.space, store_spaces(session, args.timeout), create=create)
+        if args.space is not None and create:
+            name = args.space  # a write may name any space: nothing to ask the store
+        else:
+            name = pick_space(args.space, store_spaces(session, args.timeout), create=create)
         return TripleSpace(session, name, agent=agent, _owns_session=True)
     except BaseException:
         session.close()
