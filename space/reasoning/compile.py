@@ -18,7 +18,9 @@ from space.reasoning.builtins import Args, Builtin, Effect
 from space.reasoning.joins import Heads, Trigger
 from space.reasoning.rulecode import code_of, shape
 from space.reasoning.rules import Call, Functor, Pattern, Rule, Var
+from space.reasoning.sharing import Candidate, concrete, share
 from space.reasoning.terms import TermTable
+from space.reasoning.triples import T
 
 ArgsFn = Callable[[tuple], Args]
 
@@ -62,6 +64,7 @@ class RuleIndex:
         self._removal_anywhere: list[Entry] = []
         self._starts: dict[tuple[int, int], tuple[Entry, ...]] = {}
         self._starts_by_p: dict[int, tuple[Entry, ...]] = {}
+        self._candidates: list[Candidate] = []  # joins that may share a prefix (`share`)
 
     def starts(self, p: int, o: int) -> tuple[Entry, ...]:
         """Return the joins a new triple with predicate `p` and object `o` starts, in order.
@@ -121,7 +124,14 @@ class RuleIndex:
             entry = (compiled, bind(factory))
             item = rule.body[index]
             if isinstance(item, Pattern):
-                self._file(entry, item.p, item.o, terms)
+                bucket = self._file(entry, item.p, item.o, terms)
+                plan = code.plans[index]
+                if len(plan) > 1:
+                    steps = concrete(plan, ids)
+                    where = len(bucket) - 1
+                    self._candidates.append(
+                        Candidate(bucket, where, compiled, form, index, steps, bind)
+                    )
             elif item.name == "countLiteralValues":
                 # Jena counts again at each query: wake the rule on every addition and
                 # removal with the counted predicate (what it concluded from an old count
@@ -143,14 +153,28 @@ class RuleIndex:
             self.by_p.setdefault(key, []).append(entry)
             self._removal_by_p.setdefault(key, []).append(entry)
 
-    def _file(self, entry: Entry, p: object, o: object, terms: TermTable) -> None:
+    def share(self, triples: set[T]) -> int:
+        """Let joins that start alike share their prefix (`sharing`), once every rule is added.
+
+        Returns how many joins share one.
+        """
+        self._starts.clear()
+        self._starts_by_p.clear()
+        shared = share(self._candidates, triples)
+        self._candidates = []
+        return shared
+
+    def _file(self, entry: Entry, p: object, o: object, terms: TermTable) -> list[Entry]:
+        """File a join in its bucket; return the bucket."""
         if isinstance(p, Var | Functor):
-            self.anywhere.append(entry)
+            bucket = self.anywhere
         elif isinstance(o, Var | Functor):
-            self.by_p.setdefault(terms.id(p), []).append(entry)  # type: ignore[arg-type]
+            bucket = self.by_p.setdefault(terms.id(p), [])  # type: ignore[arg-type]
         else:
             key = (terms.id(p), terms.id(o))  # type: ignore[arg-type]
-            self.by_po.setdefault(key, []).append(entry)
+            bucket = self.by_po.setdefault(key, [])
+        bucket.append(entry)
+        return bucket
 
 
 def _targets(calls: list[Call], effect: Effect, premise_of: dict[int, int]) -> tuple[int, ...]:

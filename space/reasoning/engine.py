@@ -81,6 +81,7 @@ class RuleEngine(EngineReads):
         index = RuleIndex()
         everything = [*runnable, *(owl_rules(tbox) if owl else [])]
         self._compiled = [index.add(self.terms, env, r, i) for i, r in enumerate(everything)]
+        index.share(self._store.triples)
         self._index = index
         # Backward rules with noValue: their conclusions go when no match holds (as Jena's).
         held = [c.order for c in self._compiled if c.rule.backward and withdrawable(c)]
