@@ -65,6 +65,7 @@ class RuleIndex:
         self._starts: dict[tuple[int, int], tuple[Entry, ...]] = {}
         self._starts_by_p: dict[int, tuple[Entry, ...]] = {}
         self._candidates: list[Candidate] = []  # joins that may share a prefix (`share`)
+        self.shared = 0  # how many joins run a shared prefix
 
     def starts(self, p: int, o: int) -> tuple[Entry, ...]:
         """Return the joins a new triple with predicate `p` and object `o` starts, in order.
@@ -156,13 +157,13 @@ class RuleIndex:
     def share(self, triples: set[T]) -> int:
         """Let joins that start alike share their prefix (`sharing`), once every rule is added.
 
-        Returns how many joins share one.
+        Returns how many joins share one (also kept as `shared`).
         """
         self._starts.clear()
         self._starts_by_p.clear()
-        shared = share(self._candidates, triples)
+        self.shared += share(self._candidates, triples)
         self._candidates = []
-        return shared
+        return self.shared
 
     def _file(self, entry: Entry, p: object, o: object, terms: TermTable) -> list[Entry]:
         """File a join in its bucket; return the bucket."""
