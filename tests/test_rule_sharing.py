@@ -85,8 +85,8 @@ def test_each_rule_of_a_group_binds_its_own_variables_from_the_shared_prefix():
 PRODUCTION = """
 [quiet: (?r rdf:type ex:Robot), (?r ex:has ?b), (?b ex:level "low"), (?r ex:volume ?v),
     notEqual(?v, "low") -> drop(3), (?r ex:volume "low")]
-[slow: (?bat ex:level "low"), (?robot ex:has ?bat), (?robot rdf:type ex:Robot), (?robot ex:speed ?s),
-    notEqual(?s, "low") -> drop(3), (?robot ex:speed "low")]
+[slow: (?bat ex:level "low"), (?robot ex:has ?bat), (?robot rdf:type ex:Robot),
+    (?robot ex:speed ?s), notEqual(?s, "low") -> drop(3), (?robot ex:speed "low")]
 [dark: (?x ex:has ?y), (?y ex:level "low"), (?x rdf:type ex:Robot), (?x ex:light ?l),
     notEqual(?l, "low") -> drop(3), (?x ex:light "low")]
 """
