@@ -330,7 +330,7 @@ class RuleEngine(EngineReads):
         """Fire activations one at a time while their match still holds."""
         triples, ctx, agenda, fire = self._store.triples, self._ctx, self._agenda, self._fire
         while (activation := agenda.pop()) is not None:
-            _, _, compiled, (premises, bindings) = activation
+            compiled, (premises, bindings) = activation
             if not triples.issuperset(premises):
                 continue
             guards = compiled.guards
