@@ -14,8 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from rdflib import RDF, Literal, Namespace
 
-from space.reasoning import RuleEngine, RuleLoopError, default_registry, parse_rules
-from space.reasoning.compile import RuleIndex
+from space.reasoning import RuleEngine, RuleLoopError, default_registry, parse_rules, sharing
 
 EX = Namespace("http://example.org/")
 PREFIX = "@prefix ex: <http://example.org/>.\n"
@@ -124,12 +123,14 @@ def test_a_head_added_between_two_rules_of_a_group_is_seen_by_the_second():
 
 def _without_sharing(build):
     """Build an engine whose joins share nothing: the engine as it was before sharing."""
-    share = RuleIndex.share
-    RuleIndex.share = lambda self, triples: 0  # type: ignore[method-assign]
+    groups = sharing._groups
+    sharing._groups = lambda members: {}
     try:
-        return build()
+        built = build()
     finally:
-        RuleIndex.share = share  # type: ignore[method-assign]
+        sharing._groups = groups
+    assert built._index.shared == 0
+    return built
 
 
 def _firings(delta):

@@ -18,7 +18,7 @@ from space.reasoning.builtins import Args, Builtin, Effect
 from space.reasoning.joins import Heads, Trigger
 from space.reasoning.rulecode import code_of, shape
 from space.reasoning.rules import Call, Functor, Pattern, Rule, Var
-from space.reasoning.sharing import Candidate, concrete, share
+from space.reasoning.sharing import Candidate, share
 from space.reasoning.terms import TermTable
 from space.reasoning.triples import T
 
@@ -122,17 +122,18 @@ class RuleIndex:
             start=None if code.start is None else bind(code.start),
         )
         for index, factory in code.triggers.items():
-            entry = (compiled, bind(factory))
             item = rule.body[index]
+            plan = code.plans[index]
+            if isinstance(item, Pattern) and len(plan) > 1:  # bound by `share`
+                bucket = self._file((compiled, None), item.p, item.o, terms)  # type: ignore[arg-type]
+                where = len(bucket) - 1
+                self._candidates.append(
+                    Candidate(bucket, where, compiled, form, index, plan, ids, factory, bind)
+                )
+                continue
+            entry = (compiled, bind(factory))
             if isinstance(item, Pattern):
-                bucket = self._file(entry, item.p, item.o, terms)
-                plan = code.plans[index]
-                if len(plan) > 1:
-                    steps = concrete(plan, ids)
-                    where = len(bucket) - 1
-                    self._candidates.append(
-                        Candidate(bucket, where, compiled, form, index, steps, bind)
-                    )
+                self._file(entry, item.p, item.o, terms)
             elif item.name == "countLiteralValues":
                 # Jena counts again at each query: wake the rule on every addition and
                 # removal with the counted predicate (what it concluded from an old count
@@ -155,7 +156,8 @@ class RuleIndex:
             self._removal_by_p.setdefault(key, []).append(entry)
 
     def share(self, triples: set[T]) -> int:
-        """Let joins that start alike share their prefix (`sharing`), once every rule is added.
+        """Let joins that start alike share their prefix (`sharing`), once every rule is added:
+        until then, the joins of patterns wait unbound.
 
         Returns how many joins share one (also kept as `shared`).
         """

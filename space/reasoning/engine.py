@@ -16,6 +16,7 @@ from pathlib import Path
 from rdflib import OWL, BNode, Graph, URIRef
 from rdflib.term import Node
 
+from space._heap import collector_paused
 from space.errors import InputError
 from space.reasoning import seminaive
 from space.reasoning.agenda import Agenda
@@ -80,8 +81,9 @@ class RuleEngine(EngineReads):
         env = environment(self.terms, self._store, self._ctx)
         index = RuleIndex()
         everything = [*runnable, *(owl_rules(tbox) if owl else [])]
-        self._compiled = [index.add(self.terms, env, r, i) for i, r in enumerate(everything)]
-        index.share(self._store.triples)
+        with collector_paused():  # what it makes lives as long as the engine
+            self._compiled = [index.add(self.terms, env, r, i) for i, r in enumerate(everything)]
+            index.share(self._store.triples)
         self._index = index
         # Backward rules with noValue: their conclusions go when no match holds (as Jena's).
         held = [c.order for c in self._compiled if c.rule.backward and withdrawable(c)]

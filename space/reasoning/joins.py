@@ -38,10 +38,11 @@ Trigger = Callable[[int, int, int, list[Match]], None]
 Heads = Callable[[tuple[int | None, ...]], tuple[T, ...]]
 Factory = Callable[[tuple, tuple, tuple], Callable]
 """`make(ENV, K, B)`: one engine's function for one rule (see the module's docstring)."""
-Plan = tuple[tuple, ...]
-"""A join's first steps, canonically: the seed, patterns and inlined tests, in join order,
-variables numbered by first binding and constants as `("k", K index)`; up to the first
-step no other rule could share (a builtin call: it may not be a function of its inputs)."""
+Plan = tuple[tuple[tuple, tuple[int, ...]], ...]
+"""A join's first steps: the seed, patterns and inlined tests, in join order; each step as
+its template (variables numbered by first binding, constants blank) and the K index of
+each of its constants. Up to the first step no other rule could share (a builtin call:
+it may not be a function of its inputs)."""
 Partial = tuple[tuple[T, ...], tuple[int, ...]]
 """What a join's prefix found: its premises in join order, its variables in `Plan` order."""
 
@@ -215,7 +216,7 @@ class _Body:
         self.compiler = compiler
         self.cut = cut
         self.suffix = suffix
-        self.keys: list[tuple] = []  # the plan so far
+        self.keys: list[tuple[tuple, tuple[int, ...]]] = []  # the plan so far
         self.canon: dict[Var, int] = {}  # variables by first binding, as the plan numbers them
         self.shareable = True
         self.rule = rule
@@ -245,7 +246,7 @@ class _Body:
             self._seed(item.terms, seed)
             del patterns[seed]
             try:
-                self._step(("s", *map(self._key, item.terms)))
+                self._step("s", item.terms)
             except _Cut:
                 return self.src.lines
         else:
@@ -276,21 +277,24 @@ class _Body:
         self.src.emit(f"out.append((({premises}), ({''.join(f'{v}, ' for v in values)})))")
         return self.src.lines
 
-    def _key(self, term: Term | None) -> tuple:
+    def _key(self, term: Term | None, constants: list[int]) -> tuple:
         """Name a term for the plan: a variable by when it was bound, a constant by its K."""
         if term is None:
             return ("_",)
         if isinstance(term, Var):
             return ("v", self.canon.setdefault(term, len(self.canon)))
         if isinstance(term, Functor):
-            return ("f", term.name, *map(self._key, term.args))
-        return ("k", self.compiler.constants[term])
+            return ("f", term.name, *(self._key(a, constants) for a in term.args))
+        constants.append(self.compiler.constants[term])
+        return ("k",)
 
-    def _step(self, key: tuple) -> None:
+    def _step(self, kind: str, terms: tuple[Term | None, ...]) -> None:
         """Add a step to the plan; at the cut, end the prefix or start the suffix."""
         if not self.shareable:
             return
-        self.keys.append(key)
+        constants: list[int] = []
+        template = (kind, *(self._key(t, constants) for t in terms))
+        self.keys.append((template, tuple(constants)))
         if len(self.keys) != self.cut:
             return
         ordered = [self.bound[v] for v in self.canon]
@@ -348,7 +352,7 @@ class _Body:
             if position in found:
                 self._unify(term, names[position])
         self.premises[index] = f"({names['s']}, {names['p']}, {names['o']})"
-        self._step(("p", *map(self._key, pattern.terms)))
+        self._step("p", pattern.terms)
 
     def _unify(self, term: Term | None, expr: str) -> None:
         """Bind a new variable to `expr`, or check `expr` against what the term already is."""
@@ -400,7 +404,7 @@ class _Body:
             test = _INLINE[type(call.builtin)].format(a=a, b=b)
             self.src.emit(f"if {test}:")
             self.src.emit(f"    {self.src.skip()}")
-            self._step(("c", type(call.builtin).__name__, *map(self._key, call.args)))
+            self._step(type(call.builtin).__name__, call.args)
             return
         self.shareable = False  # a builtin may not be a function of its arguments (makeTemp)
         name = f"B{index}"

@@ -14,7 +14,6 @@ matches, in the order, its whole join would give.
 
 from __future__ import annotations
 
-from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -27,60 +26,68 @@ if TYPE_CHECKING:  # compile files the joins and imports this module
     from space.reasoning.compile import CompiledRule, Entry
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Candidate:
-    """A pattern's join filed in an index bucket, which could share its first steps."""
+    """A pattern's join filed in an index bucket, bound once `share` knows if it shares."""
 
     bucket: list[Entry]
-    position: int  # in the bucket
+    position: int  # in the bucket, where a placeholder waits
     compiled: CompiledRule
     form: Shape
     seed: int  # the body item the join starts from
-    steps: Plan  # its plan, with the engine's term ids for constants (`concrete`)
+    plan: Plan
+    ids: tuple[int, ...]  # the engine's term ids of the rule's constants (K0, K1...)
+    factory: Factory  # the whole join
     bind: Callable[[Factory], Callable]  # the rule's code -> the engine's function
 
-
-def concrete(plan: Plan, ids: tuple[int, ...]) -> Plan:
-    """Return a plan with each constant `("k", K index)` as the engine's `("k", term id)`."""
-
-    def term(t: tuple) -> tuple:  # a step's kind and a call's name are strings: kept
-        if t[0] == "k":
-            return ("k", ids[t[1]])
-        return ("f", t[1], *map(term, t[2:])) if t[0] == "f" else t
-
-    return tuple(tuple(term(t) if type(t) is tuple else t for t in step) for step in plan)
+    def steps(self) -> tuple[tuple, ...]:
+        """Return the plan with the constants' term ids: equal for joins that start alike."""
+        ids = self.ids.__getitem__
+        return tuple((template, *map(ids, ks)) for template, ks in self.plan)
 
 
 def share(candidates: list[Candidate], triples: set[T]) -> int:
-    """Group the candidates of each bucket by their longest shared prefix; rewire the buckets.
+    """Bind the candidates; those of a bucket that start alike share their longest prefix.
 
-    Returns how many joins now run a shared prefix.
+    Returns how many joins run a shared prefix.
     """
     buckets: dict[int, list[Candidate]] = {}
     for candidate in candidates:
         buckets.setdefault(id(candidate.bucket), []).append(candidate)
     shared = 0
     for members in buckets.values():
-        if len(members) > 1:
-            shared += _share_bucket(members, triples)
+        grouped = _groups(members) if len(members) > 1 else {}
+        for prefix, group in grouped.items():
+            if len(group) > 1:
+                _rewire(group, len(prefix), triples)
+                shared += len(group)
+        for member in members:
+            if member.bucket[member.position][1] is None:  # shares nothing
+                member.bucket[member.position] = (member.compiled, member.bind(member.factory))
     return shared
 
 
-def _share_bucket(members: list[Candidate], triples: set[T]) -> int:
-    names: dict[tuple, int] = {}
-    plans = [tuple(names.setdefault(s, len(names)) for s in m.steps) for m in members]
-    counts = Counter(plan[:depth] for plan in plans for depth in range(2, len(plan) + 1))
+def _groups(members: list[Candidate]) -> dict[tuple, list[Candidate]]:
+    """Group members by the longest prefix each shares with another (2 steps at least).
+
+    Sorted, a plan's longest common prefix with any other is with a neighbour.
+    """
+    plans = sorted(((m.steps(), m.position, m) for m in members), key=lambda x: x[:2])
+    depths = [0] * len(plans)
+    for i in range(1, len(plans)):
+        a, b = plans[i - 1][0], plans[i][0]
+        common = 0
+        for x, y in zip(a, b, strict=False):
+            if x != y:
+                break
+            common += 1
+        depths[i - 1] = max(depths[i - 1], common)
+        depths[i] = common
     groups: dict[tuple, list[Candidate]] = {}
-    for member, plan in zip(members, plans, strict=True):
-        depth = max((d for d in range(2, len(plan) + 1) if counts[plan[:d]] > 1), default=0)
-        if depth:
+    for (plan, _, member), depth in zip(plans, depths, strict=True):
+        if depth > 1:
             groups.setdefault(plan[:depth], []).append(member)
-    shared = 0
-    for prefix, group in groups.items():
-        if len(group) > 1:
-            _rewire(sorted(group, key=lambda m: m.position), len(prefix), triples)
-            shared += len(group)
-    return shared
+    return groups
 
 
 class _Found:
@@ -94,7 +101,8 @@ class _Found:
 
 
 def _rewire(group: list[Candidate], cut: int, triples: set[T]) -> None:
-    """Replace the group's joins in their bucket: the leader's, then its followers'."""
+    """Bind the group's joins in their bucket: the leader's (the first), then its followers'."""
+    group.sort(key=lambda m: m.position)
     leader = group[0]
     prefix = leader.bind(split_code(leader.compiled.rule, leader.form, leader.seed, cut)[0])
     found = _Found()
