@@ -348,8 +348,9 @@ class RuleEngine(EngineReads):
     def _fire(self, compiled: CompiledRule, premises: tuple[T, ...], bindings: tuple) -> None:
         heads = compiled.heads(bindings)
         # Most production rules only drop: build no empty lists, no tuples twice.
-        dropped = tuple([premises[i] for i in compiled.drops]) if compiled.drops else ()
-        removed = tuple([premises[i] for i in compiled.removes]) if compiled.removes else ()
+        pick = premises.__getitem__
+        dropped = tuple(map(pick, compiled.drops)) if compiled.drops else ()
+        removed = tuple(map(pick, compiled.removes)) if compiled.removes else ()
         for builtin, args in compiled.actions:
             builtin.act(self._ctx, args(bindings))
         if dropped:
