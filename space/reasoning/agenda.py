@@ -38,10 +38,11 @@ class Agenda:
     def push(self, rule: CompiledRule, match: Match) -> None:
         """Queue a match, unless the same match is already waiting."""
         order = rule.order
-        key = (order, match[0])
-        if key in self._pending:
+        pending = self._pending
+        waiting_before = len(pending)
+        pending.add((order, match[0]))
+        if len(pending) == waiting_before:  # (one hash of the premises, not two)
             return
-        self._pending.add(key)
         waiting = self._waiting.get(order)
         if waiting is None:
             self._waiting[order] = (rule, [match])
