@@ -108,9 +108,9 @@ def test_a_head_added_between_two_rules_of_a_group_is_seen_by_the_second():
     # `near` (the leader) concludes a new ex:near for the battery's robot; `park`, in the same
     # group, must see it in the same join as its own body would (its firing's triggers).
     rules = """
-    [near: (?b ex:level "low"), (?r ex:has ?b) -> (?r ex:near ex:dock)]
-    [park: (?b ex:level "low"), (?r ex:has ?b), (?r ex:near ?p), (?p rdf:type ex:Dock),
-        noValue(?r ex:parked ?p) -> (?r ex:parked ?p)]
+    [near: (?b ex:level "low"), (?r ex:has ?b), (?r rdf:type ex:Robot) -> (?r ex:near ex:dock)]
+    [park: (?b ex:level "low"), (?r ex:has ?b), (?r rdf:type ex:Robot), (?r ex:near ?p),
+        (?p rdf:type ex:Dock), noValue(?r ex:parked ?p) -> (?r ex:parked ?p)]
     """
     shared, plain = engine(rules), _without_sharing(lambda: engine(rules))
     assert shared._index.shared >= 2
@@ -210,11 +210,14 @@ def test_sharing_changes_no_state_delta_or_firing(rules, initial, steps):
 def test_rules_differing_in_a_prefix_constant_share_nothing_wrongly(reorder):
     # Same structure, different class: a shared join on ex:Robot must not serve ex:Drone.
     rules = [
-        '[a: (?b ex:level "low"), (?r ex:has ?b), (?r rdf:type ex:Robot) -> (?r ex:slow "yes")]',
-        '[b: (?b ex:level "low"), (?r ex:has ?b), (?r rdf:type ex:Drone) -> (?r ex:land "yes")]',
+        '[a: (?b ex:level "low"), (?r ex:has ?b), (?b rdf:type ex:Cell), (?r rdf:type ex:Robot)'
+        ' -> (?r ex:slow "yes")]',
+        '[b: (?b ex:level "low"), (?r ex:has ?b), (?b rdf:type ex:Cell), (?r rdf:type ex:Drone)'
+        ' -> (?r ex:land "yes")]',
     ]
     e = engine("\n".join(reversed(rules) if reorder else rules))
-    e.load([(EX.r1, RDF.type, EX.Robot), (EX.r1, EX.has, EX.b1)])
+    assert e._index.shared >= 2
+    e.load([(EX.r1, RDF.type, EX.Robot), (EX.r1, EX.has, EX.b1), (EX.b1, RDF.type, EX.Cell)])
     e.apply(added=[(EX.b1, EX.level, LOW)])
     assert (EX.r1, EX.slow, Literal("yes")) in e
     assert (EX.r1, EX.land, Literal("yes")) not in e
@@ -225,8 +228,9 @@ def test_a_head_the_leader_adds_to_the_shared_prefix_is_seen_by_the_next_rule_at
     # shared prefix. `name`, next in the group, must see it in this same join, before `after`
     # runs, as its whole join would: the printed order tells.
     rules = """
-    [spare: (?b ex:level "low"), (?r ex:has ?b) -> (ex:r9 ex:has ?b)]
-    [name: (?b ex:level "low"), (?r ex:has ?b), (?r ex:name ?n) -> print('name', ?n)]
+    [spare: (?b ex:level "low"), (?r ex:has ?b), (?r rdf:type ex:Robot) -> (ex:r9 ex:has ?b)]
+    [name: (?b ex:level "low"), (?r ex:has ?b), (?r rdf:type ex:Robot), (?r ex:name ?n)
+        -> print('name', ?n)]
     [after: (?b ex:level "low") -> print('after')]
     """
     printed: tuple[list[str], list[str]] = ([], [])
@@ -235,7 +239,8 @@ def test_a_head_the_leader_adds_to_the_shared_prefix_is_seen_by_the_next_rule_at
     assert shared._index.shared >= 2
     for e in (shared, plain):
         names = [(EX.r1, EX.name, Literal("one")), (EX.r9, EX.name, Literal("nine"))]
-        e.load([(EX.r1, EX.has, EX.b1), *names])
+        robots = [(EX.r1, RDF.type, EX.Robot), (EX.r9, RDF.type, EX.Robot)]
+        e.load([(EX.r1, EX.has, EX.b1), *names, *robots])
         e.apply(added=[(EX.b1, EX.level, LOW)])
     assert printed[0] == printed[1]
     assert printed[0].index('"name" "nine"') < printed[0].index('"after"')

@@ -25,6 +25,10 @@ from space.reasoning.triples import T
 if TYPE_CHECKING:  # compile files the joins and imports this module
     from space.reasoning.compile import CompiledRule, Entry
 
+_SHARED_STEPS = 3
+"""The fewest steps a shared prefix has, the seed's included: one test saved per rule does
+not pay for the calls a shared join adds (the project's OWL RL pairs, `prp-fp`)."""
+
 
 @dataclass(slots=True)
 class Candidate:
@@ -68,7 +72,7 @@ def share(candidates: list[Candidate], triples: set[T]) -> int:
 
 
 def _groups(members: list[Candidate]) -> dict[tuple, list[Candidate]]:
-    """Group members by the longest prefix each shares with another (2 steps at least).
+    """Group members by the longest prefix each shares with another (`_SHARED_STEPS` at least).
 
     Sorted, a plan's longest common prefix with any other is with a neighbour.
     """
@@ -85,7 +89,7 @@ def _groups(members: list[Candidate]) -> dict[tuple, list[Candidate]]:
         depths[i] = common
     groups: dict[tuple, list[Candidate]] = {}
     for (plan, _, member), depth in zip(plans, depths, strict=True):
-        if depth > 1:
+        if depth >= _SHARED_STEPS:
             groups.setdefault(plan[:depth], []).append(member)
     return groups
 
@@ -108,32 +112,23 @@ def _rewire(group: list[Candidate], cut: int, triples: set[T]) -> None:
     found = _Found()
     for member in group:
         suffix = member.bind(split_code(member.compiled.rule, member.form, member.seed, cut)[1])
-        run = _lead if member is leader else _follow
-        member.bucket[member.position] = (member.compiled, run(prefix, suffix, found, triples))
+        join = _join(prefix, suffix, found, triples, member is leader)
+        member.bucket[member.position] = (member.compiled, join)
 
 
-def _lead(prefix: Callable, suffix: Callable, found: _Found, triples: set[T]) -> Trigger:
+def _join(
+    prefix: Callable, suffix: Callable, found: _Found, triples: set[T], leads: bool
+) -> Trigger:
+    """Return a member's join: the leader runs the prefix on each triple, a follower only
+    when the store grew since (a monotonic rule's head, added between two members)."""
     partials = found.partials
 
-    def lead(s: int, p: int, o: int, out: list) -> None:
-        partials.clear()
-        prefix(s, p, o, partials)
-        found.size = len(triples)
-        if partials:
-            suffix(partials, out)
-
-    return lead
-
-
-def _follow(prefix: Callable, suffix: Callable, found: _Found, triples: set[T]) -> Trigger:
-    partials = found.partials
-
-    def follow(s: int, p: int, o: int, out: list) -> None:
-        if len(triples) != found.size:  # a head was added since the leader's prefix
+    def join(s: int, p: int, o: int, out: list) -> None:
+        if leads or len(triples) != found.size:
             partials.clear()
             prefix(s, p, o, partials)
             found.size = len(triples)
         if partials:
             suffix(partials, out)
 
-    return follow
+    return join
