@@ -10,6 +10,8 @@ long as the process, so it is frozen out of those walks once, after start.
 from __future__ import annotations
 
 import gc
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 
 def freeze_startup() -> None:
@@ -30,3 +32,19 @@ def refreeze() -> None:
     """
     gc.unfreeze()
     freeze_startup()
+
+
+@contextmanager
+def collector_paused() -> Iterator[None]:
+    """Pause the cyclic collector (if it runs) while a block builds long-lived objects.
+
+    Each collection during a build walks what it built so far again: an engine
+    for 2,000 rules ran 8 full collections while it was built.
+    """
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()

@@ -9,12 +9,16 @@ from space.reasoning.compile import CompiledRule
 from space.reasoning.errors import RuleLoopError
 from space.reasoning.joins import Match
 
-Activation = tuple[int, int, CompiledRule, Match]
-"""A production rule matched (rule order, -recency, rule, match); it fires if the match holds."""
+Activation = tuple[CompiledRule, Match]
+"""A production rule matched; it fires if the match still holds."""
 
 
 class Agenda:
     """Queue activations once per match and stop a rule set that keeps firing.
+
+    The waiting matches of each rule are a stack (the most recent on top), and a
+    heap holds the orders of the rules with some waiting: the heap moves when a
+    rule gets its first match or loses its last, not on every match.
 
     Args:
         max_firings: how many firings one update may take before it is a loop.
@@ -22,31 +26,43 @@ class Agenda:
 
     def __init__(self, max_firings: int) -> None:
         self.max_firings = max_firings
-        self._heap: list[Activation] = []
+        self._orders: list[int] = []  # a heap
+        self._waiting: dict[int, tuple[CompiledRule, list[Match]]] = {}
         self._pending: set[tuple[int, tuple]] = set()
-        self._seq = 0
         self._total = 0
         self._recent: deque[str] = deque(maxlen=max(10, max_firings // 10))
 
     def __bool__(self) -> bool:
-        return bool(self._heap)
+        return bool(self._orders)
 
     def push(self, rule: CompiledRule, match: Match) -> None:
         """Queue a match, unless the same match is already waiting."""
-        key = (rule.order, match[0])
-        if key in self._pending:
+        order = rule.order
+        pending = self._pending
+        waiting_before = len(pending)
+        pending.add((order, match[0]))
+        if len(pending) == waiting_before:  # (one hash of the premises, not two)
             return
-        self._pending.add(key)
-        self._seq += 1
-        heapq.heappush(self._heap, (rule.order, -self._seq, rule, match))
+        waiting = self._waiting.get(order)
+        if waiting is None:
+            self._waiting[order] = (rule, [match])
+            heapq.heappush(self._orders, order)
+        else:
+            waiting[1].append(match)
 
     def pop(self) -> Activation | None:
         """Take the next activation (the caller checks it still holds), or None when empty."""
-        if not self._heap:
+        orders = self._orders
+        if not orders:
             return None
-        activation = heapq.heappop(self._heap)
-        self._pending.discard((activation[0], activation[3][0]))
-        return activation
+        order = orders[0]
+        rule, stack = self._waiting[order]
+        match = stack.pop()
+        if not stack:
+            del self._waiting[order]
+            heapq.heappop(orders)
+        self._pending.discard((order, match[0]))
+        return rule, match
 
     def count(self, rule: CompiledRule) -> None:
         """Count one firing.
@@ -69,7 +85,8 @@ class Agenda:
 
     def reset(self) -> None:
         """Forget pending activations and firing counts, before an update."""
-        self._heap.clear()
+        self._orders.clear()
+        self._waiting.clear()
         self._pending.clear()
         self._total = 0
         self._recent.clear()

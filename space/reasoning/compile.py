@@ -18,7 +18,9 @@ from space.reasoning.builtins import Args, Builtin, Effect
 from space.reasoning.joins import Heads, Trigger
 from space.reasoning.rulecode import code_of, shape
 from space.reasoning.rules import Call, Functor, Pattern, Rule, Var
+from space.reasoning.sharing import Candidate, share
 from space.reasoning.terms import TermTable
+from space.reasoning.triples import T
 
 ArgsFn = Callable[[tuple], Args]
 
@@ -62,6 +64,8 @@ class RuleIndex:
         self._removal_anywhere: list[Entry] = []
         self._starts: dict[tuple[int, int], tuple[Entry, ...]] = {}
         self._starts_by_p: dict[int, tuple[Entry, ...]] = {}
+        self._candidates: list[Candidate] = []  # joins that may share a prefix (`share`)
+        self.shared = 0  # how many joins run a shared prefix
 
     def starts(self, p: int, o: int) -> tuple[Entry, ...]:
         """Return the joins a new triple with predicate `p` and object `o` starts, in order.
@@ -118,8 +122,16 @@ class RuleIndex:
             start=None if code.start is None else bind(code.start),
         )
         for index, factory in code.triggers.items():
-            entry = (compiled, bind(factory))
             item = rule.body[index]
+            plan = code.plans[index]
+            if isinstance(item, Pattern) and len(plan) > 1:  # bound by `share`
+                bucket = self._file((compiled, None), item.p, item.o, terms)  # type: ignore[arg-type]
+                where = len(bucket) - 1
+                self._candidates.append(
+                    Candidate(bucket, where, compiled, form, index, plan, ids, factory, bind)
+                )
+                continue
+            entry = (compiled, bind(factory))
             if isinstance(item, Pattern):
                 self._file(entry, item.p, item.o, terms)
             elif item.name == "countLiteralValues":
@@ -143,14 +155,29 @@ class RuleIndex:
             self.by_p.setdefault(key, []).append(entry)
             self._removal_by_p.setdefault(key, []).append(entry)
 
-    def _file(self, entry: Entry, p: object, o: object, terms: TermTable) -> None:
+    def share(self, triples: set[T]) -> int:
+        """Let joins that start alike share their prefix (`sharing`), once every rule is added:
+        until then, the joins of patterns wait unbound.
+
+        Returns how many joins share one (also kept as `shared`).
+        """
+        self._starts.clear()
+        self._starts_by_p.clear()
+        self.shared += share(self._candidates, triples)
+        self._candidates = []
+        return self.shared
+
+    def _file(self, entry: Entry, p: object, o: object, terms: TermTable) -> list[Entry]:
+        """File a join in its bucket; return the bucket."""
         if isinstance(p, Var | Functor):
-            self.anywhere.append(entry)
+            bucket = self.anywhere
         elif isinstance(o, Var | Functor):
-            self.by_p.setdefault(terms.id(p), []).append(entry)  # type: ignore[arg-type]
+            bucket = self.by_p.setdefault(terms.id(p), [])  # type: ignore[arg-type]
         else:
             key = (terms.id(p), terms.id(o))  # type: ignore[arg-type]
-            self.by_po.setdefault(key, []).append(entry)
+            bucket = self.by_po.setdefault(key, [])
+        bucket.append(entry)
+        return bucket
 
 
 def _targets(calls: list[Call], effect: Effect, premise_of: dict[int, int]) -> tuple[int, ...]:

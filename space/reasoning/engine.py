@@ -16,6 +16,7 @@ from pathlib import Path
 from rdflib import OWL, BNode, Graph, URIRef
 from rdflib.term import Node
 
+from space._heap import collector_paused
 from space.errors import InputError
 from space.reasoning import seminaive
 from space.reasoning.agenda import Agenda
@@ -80,7 +81,9 @@ class RuleEngine(EngineReads):
         env = environment(self.terms, self._store, self._ctx)
         index = RuleIndex()
         everything = [*runnable, *(owl_rules(tbox) if owl else [])]
-        self._compiled = [index.add(self.terms, env, r, i) for i, r in enumerate(everything)]
+        with collector_paused():  # what it makes lives as long as the engine
+            self._compiled = [index.add(self.terms, env, r, i) for i, r in enumerate(everything)]
+            index.share(self._store.triples)
         self._index = index
         # Backward rules with noValue: their conclusions go when no match holds (as Jena's).
         held = [c.order for c in self._compiled if c.rule.backward and withdrawable(c)]
@@ -329,7 +332,7 @@ class RuleEngine(EngineReads):
         """Fire activations one at a time while their match still holds."""
         triples, ctx, agenda, fire = self._store.triples, self._ctx, self._agenda, self._fire
         while (activation := agenda.pop()) is not None:
-            _, _, compiled, (premises, bindings) = activation
+            compiled, (premises, bindings) = activation
             if not triples.issuperset(premises):
                 continue
             guards = compiled.guards
@@ -345,8 +348,9 @@ class RuleEngine(EngineReads):
     def _fire(self, compiled: CompiledRule, premises: tuple[T, ...], bindings: tuple) -> None:
         heads = compiled.heads(bindings)
         # Most production rules only drop: build no empty lists, no tuples twice.
-        dropped = tuple([premises[i] for i in compiled.drops]) if compiled.drops else ()
-        removed = tuple([premises[i] for i in compiled.removes]) if compiled.removes else ()
+        pick = premises.__getitem__
+        dropped = tuple(map(pick, compiled.drops)) if compiled.drops else ()
+        removed = tuple(map(pick, compiled.removes)) if compiled.removes else ()
         for builtin, args in compiled.actions:
             builtin.act(self._ctx, args(bindings))
         if dropped:

@@ -12,6 +12,10 @@ The source names no engine and no constant: each function is made by a factory
 `environment`), the rule's constants as term ids (`K<i>`, the i-th distinct
 constant, `space.reasoning.rulecode`) and its body builtins (`B<i>`, body item i).
 So the code is compiled once for every rule of the same shape and every engine.
+
+A join can also be cut in two after its first steps (`prefix`, `suffix`), so that
+rules whose joins start with the same steps run those steps once (`sharing`):
+`plan` names each step canonically for that comparison.
 """
 
 from __future__ import annotations
@@ -34,6 +38,13 @@ Trigger = Callable[[int, int, int, list[Match]], None]
 Heads = Callable[[tuple[int | None, ...]], tuple[T, ...]]
 Factory = Callable[[tuple, tuple, tuple], Callable]
 """`make(ENV, K, B)`: one engine's function for one rule (see the module's docstring)."""
+Plan = tuple[tuple[tuple, tuple[int, ...]], ...]
+"""A join's first steps: the seed, patterns and inlined tests, in join order; each step as
+its template (variables numbered by first binding, constants blank) and the K index of
+each of its constants. Up to the first step no other rule could share (a builtin call:
+it may not be a function of its inputs)."""
+Partial = tuple[tuple[T, ...], tuple[int, ...]]
+"""What a join's prefix found: its premises in join order, its variables in `Plan` order."""
 
 _EMPTY: dict = {}
 _ENV = "TRIPLES, SPO, POS, OSP, E, CTX, TERM, KEYS, FV, MKF"
@@ -95,15 +106,26 @@ class JoinCompiler:
         self.constants = constants
         self.builtins: set[int] = set()  # the B<i> the function being generated calls
 
-    def trigger(self, seed: int | None) -> Factory:
-        """Return the join that starts from a triple matching body item `seed`.
+    def trigger(self, seed: int | None) -> tuple[Factory, Plan]:
+        """Return the join that starts from a triple matching body item `seed`, and its plan.
 
         The seed is a pattern (the triple was added) or a `noValue` call (the
         triple was removed, so the call may now accept). With no seed, the join
         starts from nothing (an axiom, a body of builtins only) and ignores the triple.
+        Only a pattern's join has a plan (the others are never shared).
         """
         gen = _Body(self, self.rule, self.slots)
-        return self._define("_trigger", "s_, p_, o_, out", gen.trigger(seed))
+        return self._define("_trigger", "s_, p_, o_, out", gen.trigger(seed)), tuple(gen.keys)
+
+    def prefix(self, seed: int, cut: int) -> Factory:
+        """Return the first `cut` steps of a pattern's join: it appends a `Partial` per match."""
+        gen = _Body(self, self.rule, self.slots, cut, suffix=False)
+        return self._define("_prefix", "s_, p_, o_, out", gen.trigger(seed))
+
+    def suffix(self, seed: int, cut: int) -> Factory:
+        """Return the rest of a pattern's join after `cut` steps: from `Partial`s to matches."""
+        gen = _Body(self, self.rule, self.slots, cut, suffix=True)
+        return self._define("_suffix", "partials, out", gen.trigger(seed))
 
     def heads(self) -> Factory:
         """Return a function that instantiates the head patterns from bindings."""
@@ -175,11 +197,28 @@ _ACCESS = {
 }
 
 
-class _Body:
-    """Plan and emit the join of one rule body from one seed item."""
+class _Cut(Exception):
+    """The prefix of a join is emitted: stop planning."""
 
-    def __init__(self, compiler: JoinCompiler, rule: Rule, slots: dict[Var, int]) -> None:
+
+class _Body:
+    """Plan and emit the join of one rule body from one seed item (or a part of it, `cut`)."""
+
+    def __init__(
+        self,
+        compiler: JoinCompiler,
+        rule: Rule,
+        slots: dict[Var, int],
+        cut: int | None = None,
+        *,
+        suffix: bool = False,
+    ) -> None:
         self.compiler = compiler
+        self.cut = cut
+        self.suffix = suffix
+        self.keys: list[tuple[tuple, tuple[int, ...]]] = []  # the plan so far
+        self.canon: dict[Var, int] = {}  # variables by first binding, as the plan numbers them
+        self.shareable = True
         self.rule = rule
         self.slots = slots
         self.src = _Source()
@@ -202,21 +241,30 @@ class _Body:
             if isinstance(x, Call) and x.builtin.effect is Effect.NONE
         }
         if item is None:
-            pass
+            self.shareable = False
         elif isinstance(item, Pattern):
             self._seed(item.terms, seed)
             del patterns[seed]
+            try:
+                self._step("s", item.terms)
+            except _Cut:
+                return self.src.lines
         else:
+            self.shareable = False
             # noValue(s, p[, o]) seeds what it names; countLiteralValues(s, p, n) s and p.
             counts = item.name == "countLiteralValues"
             seeded = (*item.args[:2], None) if len(item.args) == 2 or counts else item.args
             self._seed(tuple(_in_join(a, self.pattern_vars) for a in seeded), None)
-        while True:
-            self._place_calls(calls, deferred=False)
-            if not patterns:
-                break
-            index = min(patterns, key=lambda i: (self._rank(patterns[i]), i))
-            self._pattern(patterns.pop(index), index)
+        try:
+            while True:
+                self._place_calls(calls, deferred=False)
+                if not patterns:
+                    break
+                index = min(patterns, key=lambda i: (self._rank(patterns[i]), i))
+                self._pattern(patterns.pop(index), index)
+        except _Cut:
+            return self.src.lines
+        self.shareable = False
         leftover = [c for c in calls.values() if not c.builtin.deferred]
         if leftover:
             message = f"cannot order the builtins {', '.join(c.name for c in leftover)}"
@@ -228,6 +276,43 @@ class _Body:
             values[slot] = self.bound.get(var, "None")
         self.src.emit(f"out.append((({premises}), ({''.join(f'{v}, ' for v in values)})))")
         return self.src.lines
+
+    def _key(self, term: Term | None, constants: list[int]) -> tuple:
+        """Name a term for the plan: a variable by when it was bound, a constant by its K."""
+        if term is None:
+            return ("_",)
+        if isinstance(term, Var):
+            return ("v", self.canon.setdefault(term, len(self.canon)))
+        if isinstance(term, Functor):
+            return ("f", term.name, *(self._key(a, constants) for a in term.args))
+        constants.append(self.compiler.constants[term])
+        return ("k",)
+
+    def _step(self, kind: str, terms: tuple[Term | None, ...]) -> None:
+        """Add a step to the plan; at the cut, end the prefix or start the suffix."""
+        if not self.shareable:
+            return
+        constants: list[int] = []
+        template = (kind, *(self._key(t, constants) for t in terms))
+        self.keys.append((template, tuple(constants)))
+        if len(self.keys) != self.cut:
+            return
+        ordered = [self.bound[v] for v in self.canon]
+        if not self.suffix:
+            premises = "".join(p + ", " for p in self.premises.values())
+            values = "".join(v + ", " for v in ordered)
+            self.src.emit(f"out.append((({premises}), ({values})))")
+            raise _Cut
+        self.src = _Source(temps=self.src.temps)
+        self.src.open("for _P, _V in partials:")
+        for i, index in enumerate(self.premises):
+            self.premises[index] = f"_p{i}"
+        if self.premises:
+            self.src.emit(f"{''.join(p + ', ' for p in self.premises.values())}= _P")
+        for i, var in enumerate(self.canon):
+            self.bound[var] = f"_v{i}"
+        if self.canon:
+            self.src.emit(f"{''.join(self.bound[v] + ', ' for v in self.canon)}= _V")
 
     def _expr(self, term: Term | None) -> str | None:
         """Return the source of a known term, or None if the join must find it."""
@@ -267,6 +352,7 @@ class _Body:
             if position in found:
                 self._unify(term, names[position])
         self.premises[index] = f"({names['s']}, {names['p']}, {names['o']})"
+        self._step("p", pattern.terms)
 
     def _unify(self, term: Term | None, expr: str) -> None:
         """Bind a new variable to `expr`, or check `expr` against what the term already is."""
@@ -318,7 +404,9 @@ class _Body:
             test = _INLINE[type(call.builtin)].format(a=a, b=b)
             self.src.emit(f"if {test}:")
             self.src.emit(f"    {self.src.skip()}")
+            self._step(type(call.builtin).__name__, call.args)
             return
+        self.shareable = False  # a builtin may not be a function of its arguments (makeTemp)
         name = f"B{index}"
         self.compiler.builtins.add(index)
         result = self.src.temp()

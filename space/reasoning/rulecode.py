@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from rdflib.term import Node
 
 from space.reasoning.builtins import Effect
-from space.reasoning.joins import Factory, JoinCompiler
+from space.reasoning.joins import Factory, JoinCompiler, Plan
 from space.reasoning.rules import Call, Functor, Pattern, Rule, Term, Var, variables
 
 _LIMIT = 20_000  # shapes kept; the oldest go first (a process that reloads forever)
@@ -32,11 +32,13 @@ class RuleCode:
     and the `noValue` (production rules) and `countLiteralValues` (backward rules)
     calls, which start joins on removals. `args` builds the arguments of each head
     action and body guard, by item index. A rule is `production` when a builtin
-    of it is not monotonic (the shape names each builtin's kind).
+    of it is not monotonic (the shape names each builtin's kind). `plans` has
+    each pattern's join as steps, for sharing them with other rules (`sharing`).
     """
 
     production: bool
     triggers: dict[int, Factory]
+    plans: dict[int, Plan]
     start: Factory | None
     heads: Factory
     head_args: dict[int, Factory]
@@ -52,6 +54,7 @@ class Shape:
 
 
 _CODE: dict[tuple, RuleCode] = {}
+_SPLIT: dict[tuple, tuple[Factory, Factory]] = {}
 
 
 def shape(rule: Rule) -> Shape:
@@ -90,11 +93,12 @@ def code_of(rule: Rule, form: Shape) -> RuleCode:
     slots = slots_of(rule)
     compiler = JoinCompiler(rule, slots, {c: i for i, c in enumerate(form.constants)})
     production = any(not c.builtin.monotonic for c in calls(rule))
-    triggers = {i: compiler.trigger(i) for i in _seeds(rule, production)}
+    joins = {i: compiler.trigger(i) for i in _seeds(rule, production)}
     code = RuleCode(
         production=production,
-        triggers=triggers,
-        start=None if any(isinstance(i, Pattern) for i in rule.body) else compiler.trigger(None),
+        triggers={i: factory for i, (factory, _) in joins.items()},
+        plans={i: plan for i, (_, plan) in joins.items()},
+        start=None if any(isinstance(i, Pattern) for i in rule.body) else compiler.trigger(None)[0],
         heads=compiler.heads(),
         head_args={
             i: compiler.args(c)
@@ -107,10 +111,29 @@ def code_of(rule: Rule, form: Shape) -> RuleCode:
             if isinstance(c, Call) and not c.builtin.monotonic
         },
     )
-    if len(_CODE) >= _LIMIT:
-        _CODE.pop(next(iter(_CODE)), None)
-    _CODE[form.key] = code
+    _keep(_CODE, form.key, code)
     return code
+
+
+def split_code(rule: Rule, form: Shape, seed: int, cut: int) -> tuple[Factory, Factory]:
+    """Return the join from pattern `seed` cut after `cut` steps of its plan: prefix, suffix.
+
+    Compiled the first time a shape is cut there, as `code_of`.
+    """
+    key = (form.key, seed, cut)
+    found = _SPLIT.get(key)
+    if found is None:
+        compiler = JoinCompiler(rule, slots_of(rule), {c: i for i, c in enumerate(form.constants)})
+        found = (compiler.prefix(seed, cut), compiler.suffix(seed, cut))
+        _keep(_SPLIT, key, found)
+    return found
+
+
+def _keep(cache: dict, key: tuple, value: object) -> None:
+    """Remember compiled code; past `_LIMIT` entries the oldest go first."""
+    if len(cache) >= _LIMIT:
+        cache.pop(next(iter(cache)), None)
+    cache[key] = value
 
 
 def _seeds(rule: Rule, production: bool) -> Iterator[int]:

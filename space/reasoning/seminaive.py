@@ -24,6 +24,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
+from space._heap import collector_paused
 from space.reasoning.delta import Delta
 from space.reasoning.joins import Match
 from space.reasoning.rules import Pattern
@@ -186,11 +187,8 @@ def _collector_paused() -> Iterator[None]:
     after the load would otherwise walk all of it (13% of a load). Frozen
     objects are still freed when their last reference goes.
     """
-    was = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        gc.freeze()
-        if was:
-            gc.enable()
+    with collector_paused():
+        try:
+            yield
+        finally:
+            gc.freeze()

@@ -130,8 +130,9 @@ class Support:
 
         What `_forget` does for it, inlined: it has no dependents to walk.
         """
-        found = each(self.derivations.get(triple))
-        if found:
+        held = self.derivations.get(triple)
+        if held is not None:  # (a dropped triple, asserted, mostly has no derivation)
+            found = each(held)
             triples = store.triples
             if any(triples.issuperset(p) for _, p in found):
                 return []

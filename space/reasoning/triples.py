@@ -36,16 +36,21 @@ def _put(index: Index, a: int, b: int, c: int) -> None:
 
 
 def _drop(index: Index, a: int, b: int, c: int) -> None:
+    """Unindex a triple in the store (so `c` is in its leaf)."""
     inner = index[a]
     leaf = inner[b]
     if type(leaf) is tuple:
-        leaf = inner[b] = tuple(x for x in leaf if x != c)
+        if len(leaf) > 1:  # most leaves hold one id: no tuple rebuilt for them
+            i = leaf.index(c)
+            inner[b] = leaf[:i] + leaf[i + 1 :]
+            return
     else:
         leaf.discard(c)
-    if not leaf:
-        del inner[b]
-        if not inner:
-            del index[a]
+        if leaf:
+            return
+    del inner[b]
+    if not inner:
+        del index[a]
 
 
 class TripleStore:
