@@ -92,6 +92,15 @@ def serve_process(
                 proc.wait()
 
 
+def cpu_seconds(pids: Sequence[int]) -> float:
+    """Return the CPU time (user + system) processes `pids` have used so far."""
+    total = 0
+    for pid in pids:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        total += int(fields[11]) + int(fields[12])  # utime, stime
+    return total / os.sysconf("SC_CLK_TCK")
+
+
 def percentile(values: Sequence[float], q: float) -> float:
     """Return the q-th percentile (0..100) by nearest rank."""
     ordered = sorted(values)

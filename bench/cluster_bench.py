@@ -30,9 +30,10 @@ import asyncio
 import os
 import tempfile
 import uuid
+from collections.abc import Sequence
 from pathlib import Path
 
-from _harness import OUT, median, percentile, print_table
+from _harness import OUT, cpu_seconds, median, percentile, print_table
 from aetcd import rpc
 
 from space.errors import NoQuorum, WriteConflict
@@ -104,9 +105,14 @@ async def wait_writable(client: EtcdClient) -> None:
 
 
 async def throughput_run(
-    endpoints: list[str], seconds: float, inflight: int, grouped: bool = True
+    endpoints: list[str],
+    seconds: float,
+    inflight: int,
+    grouped: bool = True,
+    pids: Sequence[int] = (),
 ) -> dict[str, float]:
-    """Measure with group commit, or (not `grouped`) one transaction per changeset."""
+    """Measure with group commit, or (not `grouped`) one transaction per changeset; with `pids`
+    (the members'), also their CPU per changeset."""
     client = EtcdClient(endpoints)
     await client.open()
     await wait_writable(client)
@@ -118,6 +124,7 @@ async def throughput_run(
         warm = loop.time() + 1.0
         await asyncio.gather(*(write_loop(clog, Robot(i), warm, []) for i in range(inflight)))
         before = clog.transactions
+        cpu = cpu_seconds(pids)
         began = loop.time()
         robots = [Robot(1000 + i) for i in range(inflight)]
         await asyncio.gather(*(write_loop(clog, r, began + seconds, acks) for r in robots))
@@ -128,6 +135,7 @@ async def throughput_run(
             "p50": percentile(latencies, 50),
             "p99": percentile(latencies, 99),
             "batch": len(acks) / max(1, clog.transactions - before),
+            "cpu": (cpu_seconds(pids) - cpu) * 1e3 / max(1, len(acks)),
             "latencies": latencies,  # type: ignore[dict-item]
         }
     finally:
@@ -207,7 +215,10 @@ def main(runs: int, seconds: float, inflight: int) -> None:
         with tempfile.TemporaryDirectory(prefix="tspace-cluster-") as tmp:
             with LocalCluster(Path(tmp)) as cluster:
                 single = asyncio.run(throughput_run(cluster.endpoints, seconds, inflight, False))
-                result = asyncio.run(throughput_run(cluster.endpoints, seconds, inflight))
+                pids = [proc.pid for proc in cluster.procs.values()]
+                result = asyncio.run(
+                    throughput_run(cluster.endpoints, seconds, inflight, pids=pids)
+                )
                 latencies += result.pop("latencies")  # type: ignore[arg-type]
                 failover = asyncio.run(failover_run(cluster, inflight))
         failovers.append(failover)
@@ -216,12 +227,12 @@ def main(runs: int, seconds: float, inflight: int) -> None:
                 run + 1,
                 single["rate"],
                 single["p99"],
-                *(result[k] for k in ("rate", "p50", "p99", "batch")),
+                *(result[k] for k in ("rate", "p50", "p99", "batch", "cpu")),
                 failover,
             ]
         )
         print(rows[-1], flush=True)
-    rows.append(["median", *(median([r[i] for r in rows]) for i in range(1, 8))])
+    rows.append(["median", *(median([r[i] for r in rows]) for i in range(1, 9))])
     print_table(
         f"etcd log, 3 members on one host, {inflight} in flight, {seconds:g} s per run "
         "(targets: >= 5000/s, p99 <= 20 ms, failover <= 3 s)",
@@ -233,6 +244,7 @@ def main(runs: int, seconds: float, inflight: int) -> None:
             "p50 ms",
             "p99 ms",
             "per txn",
+            "etcd cpu ms/cs",
             "failover s",
         ],
         rows,

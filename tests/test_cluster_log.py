@@ -96,6 +96,32 @@ def test_group_commit_orders_every_changeset_once_on_every_replica(cluster):
     asyncio.run(main())
 
 
+def test_changesets_arriving_one_by_one_during_a_transaction_go_together_in_the_next(cluster):
+    """Below `pipeline` waiting, no second transaction starts beside the one in flight."""
+
+    async def main() -> None:
+        client = EtcdClient(cluster.endpoints)
+        await client.open()
+        clog = ClusterLog(client, inflight=8, pipeline=32)
+        await clog.start()
+        first = asyncio.ensure_future(clog.append(Entry("s", b"first")))
+        deadline = time.monotonic() + 5
+        while not clog.flying:  # until the first transaction is on its way to etcd
+            assert time.monotonic() < deadline, "the first transaction never started"
+            await asyncio.sleep(0)
+        later = []
+        for i in range(20):  # each one alone, with idle committers given their turn
+            later.append(asyncio.ensure_future(clog.append(Entry("s", b"%d" % i))))
+            await asyncio.sleep(0)
+        positions = await asyncio.gather(*later)
+        assert {p.revision for p in positions} == {positions[0].revision}
+        assert positions[0].revision > (await first).revision
+        assert clog.transactions == 2
+        await _close(client, clog)
+
+    asyncio.run(main())
+
+
 def test_writes_of_one_key_commit_in_the_order_they_were_appended(cluster):
     """Two transactions are in flight at once; per key, the later append never overtakes."""
 

@@ -72,3 +72,20 @@ def test_a_retry_gets_the_first_ack_with_what_was_not_applied(ts):
     assert again.seq == first.seq
     assert again.dropped == first.dropped and len(first.dropped) == 1
     assert ts.snapshot()[1] == first.seq, "applied once"
+
+
+def test_a_functional_value_read_again_after_each_way_it_can_change(ts):
+    # The store remembers the values it replaced (space/store/values.py); each of
+    # these changes must reach what it remembers, or a value would be kept twice.
+    _functional(ts)
+    for level in range(30):
+        ts.write([(AC.b9, AC.battery_level, Literal(level))])
+    assert set(ts.query((AC.b9, AC.battery_level, None)).objects()) == {Literal(29)}
+    ts.remove([(AC.b9, AC.battery_level, Literal(29))])
+    ts.write([(AC.b9, AC.battery_level, Literal("low"))])
+    assert set(ts.query((AC.b9, AC.battery_level, None)).objects()) == {Literal("low")}
+    ts.remove([(AC.battery_level, RDF.type, OWL.FunctionalProperty)])
+    ts.write([(AC.b9, AC.battery_level, Literal("also"))])  # not functional now: a second value
+    _functional(ts)
+    ts.write([(AC.b9, AC.battery_level, Literal("last"))])
+    assert set(ts.query((AC.b9, AC.battery_level, None)).objects()) == {Literal("last")}

@@ -100,6 +100,7 @@ def replace_all(
         ops.append(update([entry], fresh=True))
         ops.append(f"DROP SILENT GRAPH <{log_graph(space).value}>")
     ops += revision_ops(db, revision)
+    db.values.clear()
     try:
         db.store.update(" ;\n".join(ops))
         db.store.flush()

@@ -37,6 +37,11 @@ Done = asyncio.Future[Position]
 # Transactions in flight at once: etcd batches concurrent proposals into one Raft round, so a
 # changeset arriving while others commit is sent at once instead of waiting a round.
 INFLIGHT = 8
+# ... but while one is in flight, another starts only once this many changesets wait: fewer
+# wait for its reply and go together in the next one. Measured through three replicas, 64 in
+# flight, 6 pairs of runs: 5.5 changesets per transaction instead of 4, CPU per changeset -6 %
+# in the replicas and -10 % in etcd, in every pair (docs/performance.md).
+PIPELINE = 32
 
 
 class ClusterNode:
@@ -77,7 +82,9 @@ class ClusterNode:
     async def _open(self) -> None:
         self.client = EtcdClient(self.endpoints)
         await self.client.open()
-        self.log = ClusterLog(self.client, root=self.root, node=self.node, inflight=INFLIGHT)
+        self.log = ClusterLog(
+            self.client, root=self.root, node=self.node, inflight=INFLIGHT, pipeline=PIPELINE
+        )
         await self.log.start()
         self.applier = Applier(
             self.client,

@@ -44,6 +44,7 @@ from space.store.db_layout import (
 )
 from space.store.flusher import Flusher
 from space.store.oxterms import OxTerm, OxTriple
+from space.store.values import Values
 
 log = logging.getLogger("tspace.store")
 
@@ -103,6 +104,7 @@ class StoreDB:
         self._commits: dict[str, int] = {}  # per space, since its last compaction
         # A cluster replica's revision quad(s) as its last commit left them (None: not read).
         self.revision_objects: list[str] | None = None
+        self.values = Values()  # functional pairs' objects, as `objects` read them
         self._flusher = Flusher(lambda: self.store if hasattr(self, "store") else None)
 
     def close(self) -> None:
@@ -157,8 +159,13 @@ class StoreDB:
         )
 
     def objects(self, space: str, s: OxTerm, p: OxTerm) -> list[OxTerm]:
-        """Return the asserted objects of `(s p ?)` in a space."""
-        return [q.object for q in self.store.quads_for_pattern(s, p, None, graph(space, "t"))]
+        """Return the asserted objects of `(s p ?)` in a space (remembered: `values.py`)."""
+        held = self.values.get(space, s, p)
+        if held is None:
+            g = graph(space, "t")
+            held = tuple(q.object for q in self.store.quads_for_pattern(s, p, None, g))
+            self.values.put(space, s, p, held)
+        return list(held)
 
     def match(
         self, space: str, which: str, pattern: tuple[OxTerm | None, ...]
@@ -201,6 +208,7 @@ class StoreDB:
                 self.store.flush()
         except (OSError, RuntimeError) as exc:
             raise CommitFailed(f"the database could not commit: {exc}") from exc
+        self.values.committed(entries)
         if revision is not None:
             from space.store.cluster_db import revision_written
 
@@ -234,6 +242,7 @@ class StoreDB:
 
         self.store = None  # type: ignore[assignment]
         self.revision_objects = None  # read again from what the reopened database holds
+        self.values.clear()
         gc.collect()
         p, m, st = f"{ROOT}probe", META.value, STORE.value
         try:
@@ -335,6 +344,7 @@ class StoreDB:
         ]
         node = space_node(space).value
         clear.append(f"DELETE WHERE {{ GRAPH <{META.value}> {{ <{node}> ?p ?o }} }}")
+        self.values.clear()
         try:
             self.store.update(" ;\n".join([*clear, render.update([entry], fresh=True)]))
             self.store.flush()
