@@ -56,13 +56,17 @@ class BulkMemory(SimpleMemory):
             put(triple)
 
     def discard(self, triple: Triple) -> None:
-        """Remove one triple if present."""
+        """Remove one triple if present, and the index entries it leaves empty.
+
+        rdflib's own removal keeps them: a reading rewritten every tick left one
+        per old value, so a long-running agent's copy grew without end.
+        """
         s, p, o = triple
         objects = self._spo.get(s, _EMPTY).get(p, _EMPTY)
         if o in objects:
-            del objects[o]
-            del self._pos[p][o][s]
-            del self._osp[o][s][p]
+            _drop(self._spo, s, p, o)
+            _drop(self._pos, p, o, s)
+            _drop(self._osp, o, s, p)
 
     def put(self, triple: Triple) -> None:
         """Add one triple (no-op if present)."""
@@ -95,9 +99,21 @@ class BulkMemory(SimpleMemory):
         """Remove what matches a pattern; a whole triple without a search."""
         s, p, o = triple_pattern
         if s is None or p is None or o is None:
-            super().remove(triple_pattern, context)  # type: ignore[arg-type]
+            for triple, _ in list(self.triples(triple_pattern, context)):  # type: ignore[arg-type]
+                self.discard(triple)
         else:
             self.discard(triple_pattern)  # type: ignore[arg-type]
+
+
+def _drop(index: dict, a: Node, b: Node, c: Node) -> None:
+    """Delete `index[a][b][c]`, then `index[a][b]` and `index[a]` if that left them empty."""
+    inner = index[a]
+    leaves = inner[b]
+    del leaves[c]
+    if not leaves:
+        del inner[b]
+        if not inner:
+            del index[a]
 
 
 _EMPTY: dict = {}

@@ -40,3 +40,17 @@ def test_graph_remove_by_triple_and_by_pattern() -> None:
     graph.remove(_t("a", "p", 1))
     graph.remove((URIRef(EX + "a"), None, None))
     assert set(graph) == {_t("b", "p", 1)}
+
+
+def test_a_value_rewritten_many_times_leaves_no_trace_of_its_old_values() -> None:
+    # A robot's reading is replaced every tick in every agent's mirror: each old value
+    # left in the indexes (an empty entry per index) grew an agent's memory without end
+    # and made `subjects_of(p)` step over every value the reading ever had.
+    store = Graph(store=BulkMemory()).store
+    reading, level = URIRef(EX + "battery"), URIRef(EX + "level")
+    for value in range(1, 1001):
+        store.update([(reading, level, Literal(value - 1))], [(reading, level, Literal(value))])
+    store.remove((reading, None, None))
+    store.update((), [(reading, level, Literal("final"))])
+    assert store.subjects_of(level, None) == [reading]
+    assert (len(store._pos[level]), len(store._osp), len(store._spo)) == (1, 1, 1)
