@@ -244,3 +244,25 @@ def test_a_head_the_leader_adds_to_the_shared_prefix_is_seen_by_the_next_rule_at
         e.apply(added=[(EX.b1, EX.level, LOW)])
     assert printed[0] == printed[1]
     assert printed[0].index('"name" "nine"') < printed[0].index('"after"')
+
+
+def test_a_rule_sharing_only_the_common_start_shares_it_with_two_that_share_more():
+    # `a` and `b` share five steps from each of their first three seeds, `c` the first three:
+    # grouping `a` with `b` alone on five steps left `c` to join the robot, its battery and its
+    # type by itself, the very case sharing is for. All three share the three steps.
+    start = '(?b ex:level "low"), (?r ex:has ?b), (?r rdf:type ex:Robot)'
+    rules = f"""
+    [a: {start}, (?r ex:base ?m), (?m ex:speed ?s) -> (?r ex:a ?s)]
+    [b: {start}, (?r ex:base ?m), (?m ex:speed ?s) -> (?r ex:b ?s)]
+    [c: {start}, (?r ex:screen ?s) -> (?r ex:c ?s)]
+    """
+    shared, plain = engine(rules), _without_sharing(lambda: engine(rules))
+    assert shared._index.shared == 3 * 3 + 2 * 2  # seeds 0-2 of each; a's and b's seeds 3-4
+    base = [(EX.r1, EX.base, EX.m1), (EX.m1, EX.speed, Literal(1))]
+    for e in (shared, plain):
+        e.load([*ROBOT, *base])
+    added = [
+        {c.triple for c in e.apply(added=[(EX.b1, EX.level, LOW)]).added} for e in (shared, plain)
+    ]
+    assert added[0] == added[1]
+    assert {(EX.r1, p) for p in (EX.a, EX.b, EX.c)} <= {(s, p) for s, p, _ in added[0]}

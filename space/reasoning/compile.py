@@ -155,17 +155,14 @@ class RuleIndex:
             self.by_p.setdefault(key, []).append(entry)
             self._removal_by_p.setdefault(key, []).append(entry)
 
-    def share(self, triples: set[T]) -> int:
+    def share(self, triples: set[T]) -> None:
         """Let joins that start alike share their prefix (`sharing`), once every rule is added:
-        until then, the joins of patterns wait unbound.
-
-        Returns how many joins share one (also kept as `shared`).
+        until then, the joins of patterns wait unbound. `shared` counts those that do.
         """
         self._starts.clear()
         self._starts_by_p.clear()
         self.shared += share(self._candidates, triples)
         self._candidates = []
-        return self.shared
 
     def _file(self, entry: Entry, p: object, o: object, terms: TermTable) -> list[Entry]:
         """File a join in its bucket; return the bucket."""

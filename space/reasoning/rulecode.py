@@ -90,8 +90,7 @@ def code_of(rule: Rule, form: Shape) -> RuleCode:
     found = _CODE.get(form.key)
     if found is not None:
         return found
-    slots = slots_of(rule)
-    compiler = JoinCompiler(rule, slots, {c: i for i, c in enumerate(form.constants)})
+    compiler = _compiler(rule, form)
     production = any(not c.builtin.monotonic for c in calls(rule))
     joins = {i: compiler.trigger(i) for i in _seeds(rule, production)}
     code = RuleCode(
@@ -123,10 +122,15 @@ def split_code(rule: Rule, form: Shape, seed: int, cut: int) -> tuple[Factory, F
     key = (form.key, seed, cut)
     found = _SPLIT.get(key)
     if found is None:
-        compiler = JoinCompiler(rule, slots_of(rule), {c: i for i, c in enumerate(form.constants)})
+        compiler = _compiler(rule, form)
         found = (compiler.prefix(seed, cut), compiler.suffix(seed, cut))
         _keep(_SPLIT, key, found)
     return found
+
+
+def _compiler(rule: Rule, form: Shape) -> JoinCompiler:
+    """Return the compiler of a rule of shape `form` (its constants as K0, K1... in order)."""
+    return JoinCompiler(rule, slots_of(rule), {c: i for i, c in enumerate(form.constants)})
 
 
 def _keep(cache: dict, key: tuple, value: object) -> None:

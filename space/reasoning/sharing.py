@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from itertools import pairwise
 from typing import TYPE_CHECKING
 
 from space.reasoning.joins import Factory, Partial, Plan, Trigger
@@ -51,7 +52,7 @@ class Candidate:
 
 
 def share(candidates: list[Candidate], triples: set[T]) -> int:
-    """Bind the candidates; those of a bucket that start alike share their longest prefix.
+    """Bind the candidates; those of a bucket that start alike share a prefix (`_groups`).
 
     Returns how many joins run a shared prefix.
     """
@@ -60,11 +61,9 @@ def share(candidates: list[Candidate], triples: set[T]) -> int:
         buckets.setdefault(id(candidate.bucket), []).append(candidate)
     shared = 0
     for members in buckets.values():
-        grouped = _groups(members) if len(members) > 1 else {}
-        for prefix, group in grouped.items():
-            if len(group) > 1:
-                _rewire(group, len(prefix), triples)
-                shared += len(group)
+        for prefix, group in _groups(members).items():
+            _rewire(group, len(prefix), triples)
+            shared += len(group)
         for member in members:
             if member.bucket[member.position][1] is None:  # shares nothing
                 member.bucket[member.position] = (member.compiled, member.bind(member.factory))
@@ -72,26 +71,39 @@ def share(candidates: list[Candidate], triples: set[T]) -> int:
 
 
 def _groups(members: list[Candidate]) -> dict[tuple, list[Candidate]]:
-    """Group members by the longest prefix each shares with another (`_SHARED_STEPS` at least).
+    """Group members by a prefix they share (`_SHARED_STEPS` steps at least).
 
-    Sorted, a plan's longest common prefix with any other is with a neighbour.
+    Sorted, plans that share a prefix are neighbours, and a run of neighbours each
+    sharing `depth` steps or more with the next all share `depth` steps. In each run
+    of neighbours sharing `_SHARED_STEPS` or more, the depth is the one that saves the
+    most steps (each neighbour it keeps together saves `depth`): two rules sharing
+    five steps do not leave a third that shares their first three alone.
     """
     plans = sorted(((m.steps(), m.position, m) for m in members), key=lambda x: x[:2])
-    depths = [0] * len(plans)
-    for i in range(1, len(plans)):
-        a, b = plans[i - 1][0], plans[i][0]
-        common = 0
-        for x, y in zip(a, b, strict=False):
-            if x != y:
-                break
-            common += 1
-        depths[i - 1] = max(depths[i - 1], common)
-        depths[i] = common
+    common = [_common(a[0], b[0]) for a, b in pairwise(plans)]
+    common.append(0)  # the last plan shares nothing with a next
     groups: dict[tuple, list[Candidate]] = {}
-    for (plan, _, member), depth in zip(plans, depths, strict=True):
+    start = 0
+    for end, depth in enumerate(common):
         if depth >= _SHARED_STEPS:
-            groups.setdefault(plan[:depth], []).append(member)
-    return groups
+            continue
+        links = common[start:end]  # the run plans[start:end + 1]
+        if links:
+            cut = max(set(links), key=lambda d: (d * sum(x >= d for x in links), d))
+            for plan, _, member in plans[start : end + 1]:
+                groups.setdefault(plan[:cut], []).append(member)
+        start = end + 1
+    return {prefix: group for prefix, group in groups.items() if len(group) > 1}
+
+
+def _common(a: tuple, b: tuple) -> int:
+    """Return how many first steps two plans share."""
+    common = 0
+    for x, y in zip(a, b, strict=False):
+        if x != y:
+            break
+        common += 1
+    return common
 
 
 class _Found:
