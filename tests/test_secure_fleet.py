@@ -90,8 +90,10 @@ def test_the_fleet_works_in_secure_mode_and_the_hmi_cannot_set_a_battery(tmp_pat
                 agents.add("reasoner")
             wait_for(lambda: set(alive_agents(ts.session, "fleet")) == agents, 30, "every agent")
             wait_for(
-                lambda: {s for s, _p, _o in ts.query((None, AC.presence, Literal("present")))}
-                == {AC[r] for r in names},
+                lambda: (
+                    {s for s, _p, _o in ts.query((None, AC.presence, Literal("present")))}
+                    == {AC[r] for r in names}
+                ),
                 30,
                 "every robot present",
                 up.logs,
