@@ -37,18 +37,8 @@ def split(wire: Mapping) -> dict[PartKey, Part]:
     header = {name: wire[name] for name in HEADER if name in wire}
     parts: dict[PartKey, Part] = {}
     for name in LISTS:
-        listed = wire.get(name) or []
-        if not isinstance(listed, list):
-            raise MalformedPayload(f"'{name}' must be a list of triples")
-        for triple in listed:
-            if (
-                not isinstance(triple, list | tuple)
-                or len(triple) != 3
-                or not isinstance(triple[0], str)
-                or not isinstance(triple[1], str)
-            ):
-                chunks(triple)  # raises, saying what is wrong
-            key = (_chunk(triple[0]), _chunk(triple[1]))
+        for triple in _listed(wire, name):
+            key = chunks(triple)
             part = parts.get(key)
             if part is None:
                 part = parts[key] = dict(header)
@@ -70,13 +60,22 @@ def joined(parts: list[Part]) -> Part:
     merged = {name: value for name, value in parts[0].items() if name not in LISTS}
     for part in parts:
         for name in LISTS:
-            listed = part.get(name)
-            if not listed:
-                continue
-            if not isinstance(listed, list):
-                raise MalformedPayload(f"'{name}' must be a list of triples")
-            merged.setdefault(name, []).extend(listed)
+            listed = _listed(part, name)
+            if listed:
+                merged.setdefault(name, []).extend(listed)
     return merged
+
+
+def _listed(wire: Mapping, name: str) -> list:
+    """Return a changeset map's list `name` (empty if absent).
+
+    Raises:
+        MalformedPayload: it is not a list.
+    """
+    listed = wire.get(name) or []
+    if not isinstance(listed, list):
+        raise MalformedPayload(f"'{name}' must be a list of triples")
+    return listed
 
 
 def chunks(triple: object) -> PartKey:
@@ -90,7 +89,7 @@ def chunks(triple: object) -> PartKey:
     s, p = triple[0], triple[1]
     if not isinstance(s, str) or not isinstance(p, str):
         raise MalformedPayload(f"a term is an N-Triples string, got {triple!r:.80}")
-    return escape(s), escape(p)
+    return _chunk(s), _chunk(p)
 
 
 def term_chunk(term: Node) -> str:

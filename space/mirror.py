@@ -222,10 +222,7 @@ class SpaceMirror:
         """Return one object of (subject, predicate) (the least, for determinism), or None."""
         if subject is None:
             return None
-        found = self._store.objects_of(subject, predicate)
-        if len(found) < 2:
-            return found[0] if found else None
-        return min(found)
+        return min(self._store.objects_of(subject, predicate), default=None)
 
     def text(self, subject: Node | None, predicate: Node) -> str | None:
         """Return the lexical form of one object of (subject, predicate), or None."""
