@@ -40,6 +40,7 @@ def everything(root: str = keys.ROOT) -> list[str]:
     return [
         "**",
         f"{root}/*/@/**",
+        f"{root}/*/@/changes/@adv/**",  # the changes' advanced publisher: cache, heartbeat
         f"{root}/*/@agents/**",
         f"{root}/*/@reasoners/**",
         f"{root}/@stores/**",
@@ -60,6 +61,7 @@ def _reads(root: str) -> list[dict]:
                 f"{root}/**",
                 f"{space}/@/changes",
                 f"{space}/@/changes/*/*",
+                f"{space}/@/changes/@adv/**",
                 f"{space}/@/seq",
                 f"{root}/@cluster/*",
             ],
@@ -72,6 +74,7 @@ def _reads(root: str) -> list[dict]:
                 f"{space}/i/**",
                 f"{space}/@/query",
                 f"{space}/@/log",
+                f"{space}/@/changes/@adv/**",
                 f"{space}/@/why",
             ],
         ),

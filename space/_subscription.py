@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import zenoh
 from rdflib.term import Node
+from zenoh.ext import AdvancedSubscriber
 
 from space.changeset import Changeset, published_seq, unpack
 from space.errors import MalformedPayload, SpaceError
@@ -61,9 +62,9 @@ class Subscription:
         self.early: list[object] = []
         self.initial: Change | None = None
         self._dispatcher = dispatcher
-        self._subscribers: list[zenoh.Subscriber] = []
+        self._subscribers: list[zenoh.Subscriber | AdvancedSubscriber] = []
 
-    def attach(self, subscriber: zenoh.Subscriber) -> None:
+    def attach(self, subscriber: zenoh.Subscriber | AdvancedSubscriber) -> None:
         """Take ownership of a Zenoh subscriber that feeds this subscription."""
         self._subscribers.append(subscriber)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 
 import zenoh
+from zenoh import ext
 
 from space import keys
 from space._handle import Handle, TemplateLike, _triples
@@ -72,7 +73,7 @@ class Watching(Handle):
         self._subscriptions.add(sub)
         try:
             for key in sub_keys:
-                sub.attach(self.session.declare_subscriber(key, self._dispatcher.feed(sub)))
+                sub.attach(self._declare(key, sub))
             if snapshot:
                 reply = self._snapshot(t, timeout)
                 seq = int(reply.get("seq") or 0)
@@ -94,6 +95,25 @@ class Watching(Handle):
             sub.start(seq)
         self._dispatcher.mark_ready(sub, seq, initial)
         return sub
+
+    def _declare(self, key: str, sub: Subscription) -> zenoh.Subscriber | ext.AdvancedSubscriber:
+        """Declare the Zenoh subscriber feeding `sub` on `key`.
+
+        Whole changesets come from the store's advanced publisher (`space.store.publish`):
+        an advanced subscriber sees a gap in its sample numbers, asks its cache for the
+        missing ones and delivers in order, before our seq check would fetch them from the
+        log; what the cache no longer holds (or a new store's, or a replica's, samples) the
+        seq check still fetches. `heartbeat=True` (the store's sporadic one): the last
+        sample lost also comes from the cache; 1.10.2's Python API has no recovery without
+        a heartbeat or periodic queries. Parts keep a plain subscriber: each part key would
+        need a publisher of its own.
+        """
+        if isinstance(sub, ScopedSubscription):
+            return self.session.declare_subscriber(key, self._dispatcher.feed(sub))
+        recovery = ext.RecoveryConfig(periodic_queries=None, heartbeat=True)
+        return ext.declare_advanced_subscriber(
+            self.session, key, self._dispatcher.feed(sub), recovery=recovery
+        )
 
     def _selectors(self, scope: list[Scope]) -> list[str]:
         try:

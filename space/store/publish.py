@@ -7,6 +7,7 @@ import logging
 import threading
 
 import zenoh
+from zenoh import ext
 
 from space import keys
 from space.changeset import pack
@@ -17,6 +18,8 @@ from space.terms import triple_from_nt
 log = logging.getLogger("tspace.store")
 
 MAX_KEY = 60_000  # bytes: a longer triple key is not published (Zenoh refuses ~64 KiB keys)
+CACHE = 128  # whole changesets each space's advanced publisher keeps to repair short gaps
+MISS_BEAT = 0.5  # seconds: its sporadic heartbeat (the last sample's number, if it moved)
 
 
 class Publisher:
@@ -25,14 +28,18 @@ class Publisher:
     Each space's whole changesets and heartbeat go out on publishers declared once
     (as Zenoh means a stream of puts on one key). Not `express`: at 2,000 changesets/s
     a message per write cost the store a third of its rate (bench/fleet.py), and alone
-    it gained nothing measurable. `close` undeclares them all.
+    it gained nothing measurable. The whole changesets' is a `zenoh.ext` advanced
+    publisher: it numbers its samples and keeps the last `CACHE`, so a subscriber's
+    Zenoh repairs a short gap from it without asking our log (see `space._watching`).
+    `close` undeclares them all.
     """
 
     def __init__(self, session: zenoh.Session, root: str) -> None:
         self.session = session
         self.root = root
         self._graph_publishers: dict[tuple[str, str], zenoh.Publisher] = {}
-        self._streams: dict[tuple[str, str], zenoh.Publisher] = {}  # (space, service) ->
+        # (space, service) -> its publisher
+        self._streams: dict[tuple[str, str], zenoh.Publisher | ext.AdvancedPublisher] = {}
         self._lock = threading.Lock()
         self._parts = PartPublisher(session, root)
 
@@ -58,14 +65,25 @@ class Publisher:
         """Publish a space's sequence number on its `@/seq` key."""
         self._stream(space, "seq").put(pack({"seq": seq}))
 
-    def _stream(self, space: str, service: str) -> zenoh.Publisher:
+    def _stream(self, space: str, service: str) -> zenoh.Publisher | ext.AdvancedPublisher:
         """Return the publisher of a space's service key, declaring it on first use."""
         with self._lock:
             publisher = self._streams.get((space, service))
             if publisher is None:
-                publisher = self._streams[(space, service)] = self.session.declare_publisher(
-                    keys.service_key(space, service, self.root),
-                    congestion_control=zenoh.CongestionControl.BLOCK,
+                key = keys.service_key(space, service, self.root)
+                block = zenoh.CongestionControl.BLOCK
+                publisher = self._streams[(space, service)] = (
+                    ext.declare_advanced_publisher(
+                        self.session,
+                        key,
+                        congestion_control=block,
+                        cache=ext.CacheConfig(CACHE),
+                        sample_miss_detection=ext.MissDetectionConfig(
+                            heartbeat=None, sporadic_heartbeat=MISS_BEAT
+                        ),
+                    )
+                    if service == "changes"
+                    else self.session.declare_publisher(key, congestion_control=block)
                 )
             return publisher
 
