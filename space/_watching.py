@@ -100,13 +100,15 @@ class Watching(Handle):
         """Declare the Zenoh subscriber feeding `sub` on `key`.
 
         Whole changesets come from the store's advanced publisher (`space.store.publish`):
-        an advanced subscriber sees a gap in its sample numbers, asks its cache for the
-        missing ones and delivers in order, before our seq check would fetch them from the
-        log; what the cache no longer holds (or a new store's, or a replica's, samples) the
-        seq check still fetches. `heartbeat=True` (the store's sporadic one): the last
-        sample lost also comes from the cache; 1.10.2's Python API has no recovery without
-        a heartbeat or periodic queries. Parts keep a plain subscriber: each part key would
-        need a publisher of its own.
+        an advanced subscriber that sees a gap in its sample numbers asks that publisher's
+        cache for the missing ones and delivers in order, so our seq check does not have
+        to ask the log. What the cache cannot give (a longer gap, another replica's
+        changesets, a restarted store's) that seq check still fetches: it is the sample
+        miss listener we need. `heartbeat=True` follows the store's sporadic heartbeat, so
+        a lost last sample comes from the cache too (and Zenoh 1.10.2's Python API has no
+        recovery without it or periodic queries). Parts keep a plain subscriber: the store
+        would need an advanced publisher per part key, each 15 KB, a queryable and a
+        heartbeat, for up to 200,000 keys a space (docs/performance.md).
         """
         if isinstance(sub, ScopedSubscription):
             return self.session.declare_subscriber(key, self._dispatcher.feed(sub))
