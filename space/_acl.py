@@ -61,9 +61,9 @@ def _reads(root: str) -> list[dict]:
                 f"{root}/**",
                 f"{space}/@/changes",
                 f"{space}/@/changes/*/*",
-                f"{space}/@/changes/@adv/**",
                 f"{space}/@/seq",
                 f"{root}/@cluster/*",
+                f"{space}/@/changes/@adv/**",  # the store's cache's heartbeat
             ],
         ),
         _rule(

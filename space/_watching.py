@@ -58,7 +58,7 @@ class Watching(Handle):
         skip_agent = self.agent if skip_own else None
         if scope is None:
             sub = Subscription(self._dispatcher, t, callback, skip_agent=skip_agent)
-            sub_keys = [self._key("changes")]
+            sub_keys: list[str] = []  # whole changesets: an advanced subscriber, below
         else:
             sub = ScopedSubscription(
                 self._dispatcher,
@@ -73,7 +73,9 @@ class Watching(Handle):
         self._subscriptions.add(sub)
         try:
             for key in sub_keys:
-                sub.attach(self._declare(key, sub))
+                sub.attach(self.session.declare_subscriber(key, self._dispatcher.feed(sub)))
+            if scope is None:
+                sub.attach(self._whole(sub))
             if snapshot:
                 reply = self._snapshot(t, timeout)
                 seq = int(reply.get("seq") or 0)
@@ -96,8 +98,8 @@ class Watching(Handle):
         self._dispatcher.mark_ready(sub, seq, initial)
         return sub
 
-    def _declare(self, key: str, sub: Subscription) -> zenoh.Subscriber | ext.AdvancedSubscriber:
-        """Declare the Zenoh subscriber feeding `sub` on `key`.
+    def _whole(self, sub: Subscription) -> ext.AdvancedSubscriber:
+        """Declare the Zenoh subscriber feeding `sub` the space's whole changesets.
 
         Whole changesets come from the store's advanced publisher (`space.store.publish`):
         an advanced subscriber that sees a gap in its sample numbers asks that publisher's
@@ -110,11 +112,9 @@ class Watching(Handle):
         would need an advanced publisher per part key, each 15 KB, a queryable and a
         heartbeat, for up to 200,000 keys a space (docs/performance.md).
         """
-        if isinstance(sub, ScopedSubscription):
-            return self.session.declare_subscriber(key, self._dispatcher.feed(sub))
         recovery = ext.RecoveryConfig(periodic_queries=None, heartbeat=True)
         return ext.declare_advanced_subscriber(
-            self.session, key, self._dispatcher.feed(sub), recovery=recovery
+            self.session, self._key("changes"), self._dispatcher.feed(sub), recovery=recovery
         )
 
     def _selectors(self, scope: list[Scope]) -> list[str]:
