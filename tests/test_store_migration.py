@@ -101,3 +101,94 @@ def test_an_unreadable_old_database_is_refused_in_one_line_naming_the_command(tm
     assert done.returncode == 1
     lines = [line for line in done.stderr.splitlines() if line.startswith("tspace serve:")]
     assert len(lines) == 1 and "python -m space.store.migrate" in lines[0], done.stderr
+
+
+def _format2_dir(data: Path) -> None:
+    """A data directory as the store wrote it before the one-quad log (format 2)."""
+    import base64
+
+    import pyoxigraph as ox
+
+    root = "urn:tspace:"
+    store = ox.Store(str(data / "oxigraph"))
+    meta, log = ox.NamedNode(root + "meta"), ox.NamedNode(root + "log:old")
+    store.add(
+        ox.Quad(ox.NamedNode(root + "store"), ox.NamedNode(root + "format"), ox.Literal("2"), meta)
+    )
+    space = ox.NamedNode(root + "space:old")
+    seq_p = ox.NamedNode(root + "seq")
+    store.add(ox.Quad(space, seq_p, ox.Literal("2", datatype=ox.NamedNode(XSD_INT)), meta))
+    store.add(
+        ox.Quad(
+            ox.NamedNode(f"{AC_NS}b1"),
+            ox.NamedNode(f"{AC_NS}name"),
+            ox.Literal("b"),
+            ox.NamedNode(root + "graph:old:asserted"),
+        )
+    )
+    ids = {1: "cs1", 2: 'cs"2 x/y'}
+    for seq, ident in ids.items():
+        entry = ox.NamedNode(f"{root}log:old:{seq}")
+        wire = {
+            "v": 1,
+            "id": ident,
+            "agent": "a",
+            "ts": TS,
+            "seq": seq,
+            "add": [[f"<{AC_NS}b1>", f"<{AC_NS}name>", '"b"']],
+        }
+        rows = {
+            "n": ox.Literal(str(seq), datatype=ox.NamedNode(XSD_INT)),
+            "payload": ox.Literal(base64.b64encode(msgpack.packb(wire)).decode()),
+            "request": ox.Literal(ident),
+        }
+        if seq == 2:
+            dropped = [{"triple": ["<a>", "<b>", '"c"'], "reason": "why"}]
+            rows["dropped"] = ox.Literal(base64.b64encode(msgpack.packb(dropped)).decode())
+        for p, o in rows.items():
+            store.add(ox.Quad(entry, ox.NamedNode(root + p), o, log))
+    store.flush()
+    del store
+
+
+XSD_INT = "http://www.w3.org/2001/XMLSchema#integer"
+
+
+def test_a_format_2_log_is_rewritten_one_quad_a_changeset_keeping_replays_and_retries(
+    tmp_path: Path,
+):
+    import pyoxigraph as ox
+
+    data = tmp_path / "data"
+    data.mkdir()
+    _format2_dir(data)
+    srv = Server(data)
+    srv.start()
+    try:
+        with TripleSpace.open(srv.endpoint, space="old") as ts:
+            assert ts.snapshot()[1] == 2
+            logged = [Changeset.decode(p) for p in ts._fetch_log(1, 2)[0]]
+            assert [c.id for c in logged] == ["cs1", 'cs"2 x/y']
+            # a retry of a logged request id gets the first outcome, and is not applied again
+            again = ts.send(
+                Changeset(id='cs"2 x/y', agent="a", added=[(AC.b2, AC.name, Literal("c"))])
+            )
+            assert again.again and again.seq == 2 and again.dropped[0].reason == "why"
+            assert ts.send(ts.changeset([(AC.b3, AC.name, Literal("d"))])).seq == 3
+        assert "rewriting the log of 1 space(s)" in srv.logs()
+    finally:
+        srv.stop()
+    store = ox.Store(str(data / "oxigraph"))
+    log = ox.NamedNode("urn:tspace:log:old")
+    rows = {
+        (q.subject.value.rsplit(":", 1)[1], q.predicate.value)
+        for q in store.quads_for_pattern(None, None, None, log)
+    }
+    assert rows - {r for r in rows if r[0] == "3"} == {
+        ("1", "urn:tspace:req:cs1"),
+        ("2", "urn:tspace:req:cs%222%20x%2Fy"),
+        ("2", "urn:tspace:dropped"),
+    }
+    assert len([r for r in rows if r[0] == "3"]) == 1  # one quad a changeset
+    marker = store.quads_for_pattern(None, ox.NamedNode("urn:tspace:format"), None, None)
+    assert [q.object.value for q in marker] == ["3"]

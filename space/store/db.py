@@ -28,18 +28,19 @@ from space.store import oxterms
 from space.store.db_layout import (
     DROPPED,
     FUNCTIONAL,
+    INT,
     META,
     PAYLOAD,
     PREFIX,
-    REQUEST,
+    REQUESTS,
     ROOT,
     SEQ,
     STORE,
     Entry,
-    N,
     entry_node,
     graph,
     log_graph,
+    request_node,
     space_node,
 )
 from space.store.flusher import Flusher
@@ -259,16 +260,21 @@ class StoreDB:
 
     def _compact(self, space: str, seq: int) -> None:
         """Forget a space's older sequence numbers, and log entries older than the `log_keep`
-        latest (their request ids with them)."""
+        latest (their request ids with them).
+
+        An entry's seq is in its IRI only (`db_layout`): the log is read whole to find
+        the old ones, once every `COMPACT_EVERY` commits.
+        """
         g, m, node = log_graph(space).value, META.value, space_node(space).value
         ops = [
             f"DELETE {{ GRAPH <{m}> {{ <{node}> <{SEQ.value}> ?n }} }} WHERE {{ GRAPH <{m}> "
             f"{{ <{node}> <{SEQ.value}> ?n FILTER(?n < {seq}) }} }}"
         ]
         if seq > self.log_keep:
+            number = f'<{INT.value}>(STRAFTER(STR(?e), "{g}:"))'
             ops.append(
                 f"DELETE {{ GRAPH <{g}> {{ ?e ?p ?o }} }} WHERE {{ GRAPH <{g}> "
-                f"{{ ?e <{N.value}> ?n . FILTER(?n <= {seq - self.log_keep}) ?e ?p ?o }} }}"
+                f"{{ ?e ?p ?o }} FILTER({number} <= {seq - self.log_keep}) }}"
             )
         try:
             self.store.update(" ;\n".join(ops))
@@ -280,8 +286,9 @@ class StoreDB:
         rows = []
         g = log_graph(space)
         for seq in range(max(first, 1), last + 1):
-            for q in self.store.quads_for_pattern(entry_node(space, seq), PAYLOAD, None, g):
-                rows.append((seq, base64.b64decode(q.object.value)))
+            for q in self.store.quads_for_pattern(entry_node(space, seq), None, None, g):
+                if q.predicate == PAYLOAD or q.predicate.value.startswith(REQUESTS):
+                    rows.append((seq, base64.b64decode(q.object.value)))
         return rows
 
     def outcome(self, space: str, request: str) -> tuple[int, bytes, bytes] | None:
@@ -290,14 +297,12 @@ class StoreDB:
         `dropped` is the msgpack list the writer was told was not applied (b"" if none).
         """
         g = log_graph(space)
-        for q in self.store.quads_for_pattern(None, REQUEST, ox.Literal(request), g):
+        for q in self.store.quads_for_pattern(None, request_node(request), None, g):
+            dropped = b""
+            for d in self.store.quads_for_pattern(q.subject, DROPPED, None, g):
+                dropped = base64.b64decode(d.object.value)
             seq = int(q.subject.value.rsplit(":", 1)[1])
-            rows = self.log(space, seq, seq)
-            if rows:
-                dropped = b""
-                for d in self.store.quads_for_pattern(q.subject, DROPPED, None, g):
-                    dropped = base64.b64decode(d.object.value)
-                return seq, rows[0][1], dropped
+            return seq, base64.b64decode(q.object.value), dropped
         return None
 
     def triples(self, space: str) -> Iterator[tuple[str, str, str, str, str]]:

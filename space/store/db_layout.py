@@ -8,9 +8,11 @@ Layout (every IRI under `urn:tspace:`, space names being IRI-safe):
   as the triple `s p "<timestamp>"`, so the later-timestamp rule survives restarts.
 - `meta`: `space:<space> seq N` (the space's sequence number: the largest N, older
   ones are dropped at compaction) and its prefixes.
-- `log:<space>`: per changeset `log:<space>:<seq>` with its `n`, the published
-  payload (base64 msgpack), the request id it answered and what its writer was
-  told was not applied.
+- `log:<space>`: per changeset ONE quad `log:<space>:<seq> req:<request id> "<payload>"`
+  (the published payload, base64 msgpack; the predicate is `payload` when it answered
+  no request id), and, when its writer was told something was not applied, a
+  `dropped` quad. One quad, not one per field: every replica of a cluster commits
+  every changeset's log entry, and each quad is six index entries in RocksDB.
 
 Apart from `StoreDB` because the database, the N-Quads and SPARQL it is written
 with (`render`), the cluster's additions (`cluster_db`) and the migration from
@@ -23,25 +25,25 @@ from __future__ import annotations
 import base64
 from dataclasses import dataclass, field
 from functools import lru_cache
+from urllib.parse import quote
 
 import pyoxigraph as ox
 
 from space.store.oxterms import OxTriple
 
 NQUADS = ox.RdfFormat.N_QUADS
-FORMAT = "2"  # 1 was SQLite (space.sqlite3)
+FORMAT = "3"  # 1 was SQLite (space.sqlite3); 2 logged a changeset in 3-4 quads (`migrate`)
 ROOT = "urn:tspace:"
 META = ox.NamedNode(ROOT + "meta")
 SEQ = ox.NamedNode(ROOT + "seq")
 PREFIX = ox.NamedNode(ROOT + "prefix")
 FORMAT_P = ox.NamedNode(ROOT + "format")
 STORE = ox.NamedNode(ROOT + "store")
-N = ox.NamedNode(ROOT + "n")
 PAYLOAD = ox.NamedNode(ROOT + "payload")
-REQUEST = ox.NamedNode(ROOT + "request")
 DROPPED = ox.NamedNode(ROOT + "dropped")
+REQUESTS = ROOT + "req:"  # + a request id, percent-encoded: the predicate of its log entry
 INT = ox.NamedNode("http://www.w3.org/2001/XMLSchema#integer")
-_N, _PAYLOAD, _REQUEST, _DROPPED = (f"<{x.value}>" for x in (N, PAYLOAD, REQUEST, DROPPED))
+_PAYLOAD, _DROPPED = (f"<{x.value}>" for x in (PAYLOAD, DROPPED))
 FUNCTIONAL = (
     "http://www.w3.org/1999/02/22-rdf-syntax-ns#type",
     "http://www.w3.org/2002/07/owl#FunctionalProperty",
@@ -69,6 +71,11 @@ def entry_node(space: str, seq: int) -> ox.NamedNode:
     return ox.NamedNode(f"{ROOT}log:{space}:{seq}")
 
 
+def request_node(request: str) -> ox.NamedNode:
+    """Return the predicate of the log entry that answered request id `request`."""
+    return ox.NamedNode(REQUESTS + quote(request, safe=""))
+
+
 @dataclass
 class Entry:
     """One net changeset to commit: its triples, stamps, prefixes and log entry."""
@@ -91,19 +98,15 @@ class Entry:
 def log_rows(
     space: str, seq: int, request: str, payload: bytes, dropped: bytes = b""
 ) -> list[tuple[str, str, str]]:
-    """Return the N-Triples `(s, p, o)` of one log entry, in `log_graph(space)`: its seq,
-    payload, request id and what was dropped.
+    """Return the N-Triples `(s, p, o)` of one log entry, in `log_graph(space)`: its seq
+    and request id with its payload, and what was dropped (if anything).
 
     Texts, not pyoxigraph terms: the store writes them into its commit's text as
     they are (`render`), a few microseconds less a changeset than terms printed.
     """
     entry = f"<{ROOT}log:{space}:{seq}>"
-    rows = [
-        (entry, _N, f'"{seq}"^^<{INT.value}>'),
-        (entry, _PAYLOAD, f'"{base64.b64encode(payload).decode("ascii")}"'),
-    ]
-    if request:
-        rows.append((entry, _REQUEST, str(ox.Literal(request))))
+    answered = f"<{REQUESTS}{quote(request, safe='')}>" if request else _PAYLOAD
+    rows = [(entry, answered, f'"{base64.b64encode(payload).decode("ascii")}"')]
     if dropped:
         rows.append((entry, _DROPPED, f'"{base64.b64encode(dropped).decode("ascii")}"'))
     return rows

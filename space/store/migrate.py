@@ -1,16 +1,23 @@
-"""Open the Oxigraph database of a data directory, migrating an old SQLite one first.
+"""Open the Oxigraph database of a data directory, migrating an older one first.
 
 Before Oxigraph, a data directory held `space.sqlite3`. Opening such a
 directory must never show an empty space: its triples, prefixes, functional
 timestamps and log are copied into Oxigraph on first open (the SQLite file is
 left as it was, renamed `space.sqlite3.migrated`), and the format marker is
 written last, so a migration cut short starts again from scratch next time.
+
+Format 2 logged a changeset in three or four quads (`n`, `payload`, `request`,
+`dropped`); format 3 in one (`db_layout`). Its log entries are rewritten on
+first open, a thousand to an update, each entry wholly in one: one cut short
+goes on from the entries still in format 2 next time, and the marker says 3
+once none is left.
 `python -m space.store.migrate DIR` does the same without serving.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import logging
 import sqlite3
 import sys
@@ -46,11 +53,15 @@ def open_store(data_dir: Path, path: Path) -> ox.Store:
                 f"data directory {path.parent} is in use by another store process"
             ) from None
         raise
-    marked = any(store.quads_for_pattern(db_layout.STORE, db_layout.FORMAT_P, None, db_layout.META))
+    marks = list(store.quads_for_pattern(db_layout.STORE, db_layout.FORMAT_P, None, db_layout.META))
     old = data_dir / OLD_FILE
-    if not marked:
-        if old.exists():
-            _migrate(old, store)
+    if not marks and old.exists():
+        _migrate(old, store)
+    elif marks and marks[0].object.value == "2":
+        _one_quad_log(store)
+    if [q.object.value for q in marks] != [db_layout.FORMAT]:
+        for q in marks:
+            store.remove(q)
         store.add(
             ox.Quad(
                 db_layout.STORE, db_layout.FORMAT_P, ox.Literal(db_layout.FORMAT), db_layout.META
@@ -58,6 +69,41 @@ def open_store(data_dir: Path, path: Path) -> ox.Store:
         )
         store.flush()
     return store
+
+
+_N2, _REQUEST2 = (ox.NamedNode(db_layout.ROOT + x) for x in ("n", "request"))
+
+
+def _one_quad_log(store: ox.Store) -> None:
+    """Rewrite every log entry of format 2 (`n`, `payload`, `request` quads) as one quad."""
+    prefix = db_layout.ROOT + "log:"
+    graphs = [g for g in store.named_graphs() if g.value.startswith(prefix)]
+    log.warning("rewriting the log of %d space(s) one quad to a changeset (once)", len(graphs))
+    for g in graphs:
+        while True:
+            old = list(itertools.islice(store.quads_for_pattern(None, _N2, None, g), 1000))
+            if not old:
+                break
+            gone, new = [], []
+            for n in old:
+                quads = list(store.quads_for_pattern(n.subject, None, None, g))
+                by = {q.predicate: q for q in quads}
+                payload, request = by.get(db_layout.PAYLOAD), by.get(_REQUEST2)
+                gone += [q for q in quads if q.predicate in (_N2, _REQUEST2, db_layout.PAYLOAD)]
+                if payload is not None:
+                    answered = db_layout.request_node(request.object.value) if request else None
+                    new.append(ox.Quad(n.subject, answered or db_layout.PAYLOAD, payload.object, g))
+            store.update(
+                " ;\n".join(
+                    f"{verb} DATA {{ {' '.join(map(_in_graph, quads))} }}"
+                    for verb, quads in (("DELETE", gone), ("INSERT", new))
+                    if quads
+                )
+            )
+
+
+def _in_graph(q: ox.Quad) -> str:
+    return f"GRAPH {q.graph_name} {{ {q.subject} {q.predicate} {q.object} }}"
 
 
 def _migrate(old: Path, store: ox.Store) -> None:
