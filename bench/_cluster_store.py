@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
 import queue
 import signal
 import subprocess
@@ -145,7 +146,8 @@ def write(
 def throughput(
     endpoints: list[str], seconds: float, inflight: int, pids: dict[str, list[int]] | None = None
 ) -> dict[str, float]:
-    """Measure; with `pids` ({"replicas": [...], "etcd": [...]}), also their CPU per ack."""
+    """Measure; with `pids` ({"replicas": [...], "etcd": [...], "client": [...]}), also their
+    CPU per ack."""
     handles = [TripleSpace.open(e, space="bench", agent="bench") for e in endpoints]
     pids = pids or {}
     try:
@@ -220,7 +222,8 @@ def run_once(
     with LocalCluster(workdir / "etcd") as cluster:
         with replicas(cluster, workdir, code=code) as (endpoints, pids):
             members = [proc.pid for proc in cluster.procs.values()]
-            result = throughput(endpoints, seconds, inflight, {"replicas": pids, "etcd": members})
+            kinds = {"replicas": pids, "etcd": members, "client": [os.getpid()]}
+            result = throughput(endpoints, seconds, inflight, kinds)
             if kill:
                 result["failover"] = failover(cluster, endpoints, inflight)
     return result

@@ -264,12 +264,19 @@ def main_store(runs: int, seconds: float, inflight: int, old: Path | None) -> No
             with tempfile.TemporaryDirectory(prefix="tspace-cluster-store-") as tmp:
                 o = run_once(Path(tmp), seconds, inflight, old, kill=False)
             before += o.pop("latencies")  # type: ignore[arg-type]
-            row += [o["rate"], o["p50"], o["p99"], o["cpu replicas"], o["cpu etcd"]]
+            row += [
+                o["rate"],
+                o["p50"],
+                o["p99"],
+                o["cpu replicas"],
+                o["cpu etcd"],
+                o["cpu client"],
+            ]
         with tempfile.TemporaryDirectory(prefix="tspace-cluster-store-") as tmp:
             r = run_once(Path(tmp), seconds, inflight)
         latencies += r.pop("latencies")  # type: ignore[arg-type]
         failovers.append(r["failover"])
-        row += [r["rate"], r["p50"], r["p99"], r["cpu replicas"], r["cpu etcd"]]
+        row += [r["rate"], r["p50"], r["p99"], r["cpu replicas"], r["cpu etcd"], r["cpu client"]]
         row += [r["failed"], r["failover"]]
         if old is not None:
             row.append(r["rate"] / o["rate"])
@@ -278,8 +285,8 @@ def main_store(runs: int, seconds: float, inflight: int, old: Path | None) -> No
     rows.append(["median", *(median([r[i] for r in rows]) for i in range(1, len(rows[0])))])
     header = ["run", "embedded cs/s", "p99 ms"]
     if old is not None:
-        header += ["before cs/s", "p50 ms", "p99 ms", "cpu ms/cs: replicas", "etcd"]
-    header += ["cluster cs/s", "p50 ms", "p99 ms", "cpu ms/cs: replicas", "etcd"]
+        header += ["before cs/s", "p50 ms", "p99 ms", "cpu ms/cs: replicas", "etcd", "client"]
+    header += ["cluster cs/s", "p50 ms", "p99 ms", "cpu ms/cs: replicas", "etcd", "client"]
     header += ["refused", "failover s"]
     if old is not None:
         header.append("x before")
@@ -288,7 +295,7 @@ def main_store(runs: int, seconds: float, inflight: int, old: Path | None) -> No
         + ("then 3 etcd members and 3 replicas of the code before, " if old else "then ")
         + "3 etcd members and 3 replicas on this host "
         "(targets: >= 5000/s, p99 <= 20 ms, failover <= 3 s); cpu: CPU time of the 3 replicas, "
-        "of the 3 etcd members, per acknowledged changeset",
+        "of the 3 etcd members, of this client, per acknowledged changeset",
         [*header, "load"],
         rows,
     )
