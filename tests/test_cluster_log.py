@@ -122,6 +122,32 @@ def test_changesets_arriving_one_by_one_during_a_transaction_go_together_in_the_
     asyncio.run(main())
 
 
+def test_a_busy_log_waits_for_the_writers_on_their_way_an_idle_one_sends_at_once(cluster):
+    """After a transaction of `linger_from` entries the next waits `linger`; not after less."""
+    linger = 2.0
+
+    async def main() -> None:
+        client = EtcdClient(cluster.endpoints)
+        await client.open()
+        clog = ClusterLog(client, inflight=8, pipeline=32, linger=linger, linger_from=8)
+        await clog.start()
+        began = time.monotonic()
+        await clog.append(Entry("s", b"alone"))
+        assert time.monotonic() - began < linger  # idle: sent at once
+        await asyncio.gather(*(clog.append(Entry("s", b"busy%d" % i)) for i in range(8)))
+        assert clog.transactions == 2  # the eight went together: the log is busy
+        one = asyncio.ensure_future(clog.append(Entry("s", b"one")))
+        await asyncio.sleep(0.2)  # a writer of the last transaction, on its way back
+        two = asyncio.ensure_future(clog.append(Entry("s", b"two")))
+        assert (await one).revision == (await two).revision
+        began = time.monotonic()
+        await clog.append(Entry("s", b"alone again"))  # the last carried two: idle again
+        assert time.monotonic() - began < linger
+        await _close(client, clog)
+
+    asyncio.run(main())
+
+
 def test_writes_of_one_key_commit_in_the_order_they_were_appended(cluster):
     """Two transactions are in flight at once; per key, the later append never overtakes."""
 

@@ -103,6 +103,8 @@ class ClusterLog:
         inflight: int = 2,
         batch: int = 256,
         pipeline: int = 1,
+        linger: float = 0.0,
+        linger_from: int = 8,
     ) -> None:
         self.client = client
         self.root = root
@@ -114,6 +116,11 @@ class ClusterLog:
         # With fewer than this many entries queued, no transaction starts while one is in
         # flight: they wait for its reply and go together in the next one.
         self.pipeline = pipeline
+        # While the log is busy (its last transaction carried `linger_from` entries or more),
+        # a transaction waits `linger` seconds before it starts, unless `pipeline` entries
+        # wait: the writers of the last one are on their way back, and go in this one.
+        self.linger, self.linger_from = linger, linger_from
+        self._last = 0  # entries in the last transaction committed
         self.flying = 0  # transactions in flight now
         self.transactions = 0  # committed transactions, for the benchmark's batch size
         self._queue: list[_Waiting] = []
@@ -167,6 +174,9 @@ class ClusterLog:
             # A fuller transaction costs etcd and every replica less CPU per changeset
             # than several small ones, so a few entries wait for the one in flight.
             wait = self.flying and len(self._queue) < self.pipeline
+            if not wait and self._busy_log():
+                await asyncio.sleep(self.linger)
+                wait = self.flying and len(self._queue) < self.pipeline  # another one started
             batch, written = ([], set()) if wait else self._take_batch()
             if not batch:  # nothing queued, too few, or all of it waits for a batch in flight
                 self._wake.clear()
@@ -188,6 +198,13 @@ class ClusterLog:
                 self._busy.subtract(written)
                 self._busy = +self._busy  # drop the keys no batch holds any more
                 self._wake.set()
+
+    def _busy_log(self) -> bool:
+        """Return whether the next transaction should linger (see `linger`)."""
+        queued = len(self._queue)
+        return bool(self.linger and queued and queued < self.pipeline) and (
+            self._last >= self.linger_from
+        )
 
     def _take_batch(self) -> tuple[list[_Waiting], set[bytes]]:
         """Take queued entries up to the transaction's limits; return them and the keys written.
@@ -247,6 +264,7 @@ class ClusterLog:
 
     def _resolve(self, batch: list[_Waiting], revision: int) -> None:
         self.transactions += 1
+        self._last = len(batch)
         counters: dict[str, int] = {}
         for entry, future in batch:
             index = counters.get(entry.space, 0)
