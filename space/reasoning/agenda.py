@@ -8,6 +8,7 @@ from collections import Counter, deque
 from space.reasoning.compile import CompiledRule
 from space.reasoning.errors import RuleLoopError
 from space.reasoning.joins import Match
+from space.reasoning.triples import T
 
 Activation = tuple[CompiledRule, Match]
 """A production rule matched; it fires if the match still holds."""
@@ -16,9 +17,12 @@ Activation = tuple[CompiledRule, Match]
 class Agenda:
     """Queue activations once per match and stop a rule set that keeps firing.
 
-    The waiting matches of each rule are a stack (the most recent on top), and a
-    heap holds the orders of the rules with some waiting: the heap moves when a
-    rule gets its first match or loses its last, not on every match.
+    The waiting matches of each rule are a stack (the most recent on top) behind
+    the rule itself, and a heap holds the orders of the rules with some waiting:
+    the heap moves when a rule gets its first match or loses its last, not on
+    every match. A match waits once: `_pending` maps its premises to the order of
+    the rule that waits on them (a set of orders in the rare case of two rules
+    with equal premises), so a push keeps no new tuple alive for the collector.
 
     Args:
         max_firings: how many firings one update may take before it is a loop.
@@ -27,8 +31,8 @@ class Agenda:
     def __init__(self, max_firings: int) -> None:
         self.max_firings = max_firings
         self._orders: list[int] = []  # a heap
-        self._waiting: dict[int, tuple[CompiledRule, list[Match]]] = {}
-        self._pending: set[tuple[int, tuple]] = set()
+        self._waiting: dict[int, list] = {}  # order -> [rule, match, match...]
+        self._pending: dict[tuple[T, ...], int | set[int]] = {}
         self._total = 0
         self._recent: deque[str] = deque(maxlen=max(10, max_firings // 10))
 
@@ -39,16 +43,19 @@ class Agenda:
         """Queue a match, unless the same match is already waiting."""
         order = rule.order
         pending = self._pending
-        waiting_before = len(pending)
-        pending.add((order, match[0]))
-        if len(pending) == waiting_before:  # (one hash of the premises, not two)
-            return
+        premises = match[0]
+        size = len(pending)
+        held = pending.setdefault(premises, order)
+        if len(pending) == size:  # some rule waits on these premises already
+            if held == order or (type(held) is set and order in held):
+                return
+            pending[premises] = {held, order} if type(held) is int else held | {order}
         waiting = self._waiting.get(order)
         if waiting is None:
-            self._waiting[order] = (rule, [match])
+            self._waiting[order] = [rule, match]
             heapq.heappush(self._orders, order)
         else:
-            waiting[1].append(match)
+            waiting.append(match)
 
     def pop(self) -> Activation | None:
         """Take the next activation (the caller checks it still holds), or None when empty."""
@@ -56,13 +63,17 @@ class Agenda:
         if not orders:
             return None
         order = orders[0]
-        rule, stack = self._waiting[order]
+        stack = self._waiting[order]
         match = stack.pop()
-        if not stack:
+        if len(stack) == 1:
             del self._waiting[order]
             heapq.heappop(orders)
-        self._pending.discard((order, match[0]))
-        return rule, match
+        premises = match[0]
+        held = self._pending.pop(premises)
+        if type(held) is set:
+            held.discard(order)
+            self._pending[premises] = held.pop() if len(held) == 1 else held
+        return stack[0], match
 
     def count(self, rule: CompiledRule) -> None:
         """Count one firing.

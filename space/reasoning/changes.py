@@ -7,7 +7,7 @@ from space.reasoning.terms import TermTable
 from space.reasoning.triples import T, TripleStore
 from space.terms import Triple
 
-JournalEntry = tuple[bool, T, tuple[int, tuple[T, ...]] | None]
+JournalEntry = bool | T | tuple[int, tuple[T, ...]] | None
 
 # (was present, was asserted), indexed by the two tests: no new pair per touch.
 _STATES = (((False, False), (False, True)), ((True, False), (True, True)))
@@ -19,7 +19,8 @@ class ChangeLog:
     """Remember, for each triple an update touches, whether it was present and asserted before.
 
     The journal lists every assertion (True) and retraction (False) in order, with
-    the production rule that made an assertion, so an update can be reversed.
+    the production rule that made an assertion, so an update can be reversed: three
+    items an entry, flat (a tuple per entry was two objects a firing for the collector).
     """
 
     def __init__(self, terms: TermTable, store: TripleStore, asserted: set[T]) -> None:

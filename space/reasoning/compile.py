@@ -25,7 +25,7 @@ from space.reasoning.triples import T
 ArgsFn = Callable[[tuple], Args]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class CompiledRule:
     """A rule ready to run: what it asserts, deletes and does once its body matched.
 

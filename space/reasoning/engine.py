@@ -232,7 +232,7 @@ class RuleEngine(EngineReads):
                 continue
             touch(t)
             asserted.add(t)
-            journal.append((True, t, by))
+            journal += (True, t, by)  # flat: no tuple kept per entry
             if by is not None:
                 self._asserted_by[t] = by
             if add(t):
@@ -313,7 +313,7 @@ class RuleEngine(EngineReads):
                 continue
             touch(t)
             asserted.discard(t)
-            journal.append((False, t, by.pop(t, None)))
+            journal += (False, t, by.pop(t, None))
             doomed.append(t)
         if not doomed:
             return
@@ -374,10 +374,11 @@ class RuleEngine(EngineReads):
 
     def _undo(self) -> None:
         """Reverse this update's assertions and retractions, with production rules off."""
-        journal = self._log.journal[:]
+        journal = self._log.journal
+        entries = [journal[i : i + 3] for i in range(0, len(journal), 3)]
         self._production = False
         try:
-            for was_added, t, by in reversed(journal):
+            for was_added, t, by in reversed(entries):
                 if was_added:
                     self._unassert([t], notify=False)
                 else:
