@@ -46,7 +46,9 @@ class CompiledRule:
     start: Trigger | None = None  # for a body without triples: its join, run at load
 
 
-Entry = tuple[CompiledRule, Trigger]
+Entry = tuple[CompiledRule | None, Trigger]
+"""A join and its rule; None for a batch of production rules (`sharing`), whose join
+appends `(rule, matches)` pairs."""
 
 
 class RuleIndex:
@@ -128,7 +130,7 @@ class RuleIndex:
                 bucket = self._file((compiled, None), item.p, item.o, terms)  # type: ignore[arg-type]
                 where = len(bucket) - 1
                 self._candidates.append(
-                    Candidate(bucket, where, compiled, form, index, plan, ids, factory, bind)
+                    Candidate(bucket, where, compiled, form, index, plan, ids, factory, bind, runs)
                 )
                 continue
             entry = (compiled, bind(factory))

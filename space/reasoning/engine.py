@@ -279,7 +279,12 @@ class RuleEngine(EngineReads):
                 trigger(s, p, o, out)
                 if not out:
                     continue
-                if compiled.production:
+                if compiled is None:  # a batch of production rules (`sharing`)
+                    if self._production:
+                        for rule, matches in out:
+                            for match in matches:
+                                agenda.push(rule, match)
+                elif compiled.production:
                     if self._production:
                         for match in out:
                             agenda.push(compiled, match)

@@ -99,6 +99,22 @@ class JoinCompiler:
         gen = JoinBody(self, self.rule, self.slots, cut, suffix=True)
         return self._define("_suffix", "partials, out", gen.trigger(seed))
 
+    def suffixes(self, seed: int, cut: int) -> Factory:
+        """Return `suffix` for a batch of rules of this shape, in one call: each member
+        `(rule, K)` gives its constants; a member's matches are appended as `(rule, matches)`.
+        """
+        gen = JoinBody(self, self.rule, self.slots, cut, suffix=True)
+        constants = "".join(f"K{i}, " for i in range(len(self.constants)))
+        body = [
+            "    for RULE, K in members:",
+            *([f"        {constants}= K"] if constants else []),
+            "        out = []",
+            *("    " + line for line in gen.trigger(seed)),
+            "        if out:",
+            "            found.append((RULE, out))",
+        ]
+        return self._define("_suffixes", "partials, found, members", body, constants=False)
+
     def heads(self) -> Factory:
         """Return a function that instantiates the head patterns from bindings."""
         triples = [
@@ -126,10 +142,13 @@ class JoinCompiler:
             return f"MKF({term.name!r}, ({args}))"
         return self.constant(term)
 
-    def _define(self, name: str, params: str, body: list[str]) -> Factory:
-        """Compile the factory of one function: it binds ENV, K and B, then defines it."""
+    def _define(
+        self, name: str, params: str, body: list[str], *, constants: bool = True
+    ) -> Factory:
+        """Compile the factory of one function: it binds ENV, K (unless the function
+        reads its `constants` itself) and B, then defines it."""
         lines = ["def make(ENV, K, B):", f"    {_ENV} = ENV"]
-        if self.constants:
+        if self.constants and constants:
             lines.append(f"    {''.join(f'K{i}, ' for i in range(len(self.constants)))}= K")
         lines += [f"    B{i} = B[{i}]" for i in sorted(self.builtins)]
         lines += [f"    def {name}({params}):", *("    " + line for line in body)]

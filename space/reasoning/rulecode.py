@@ -55,6 +55,7 @@ class Shape:
 
 _CODE: dict[tuple, RuleCode] = {}
 _SPLIT: dict[tuple, tuple[Factory, Factory]] = {}
+_BATCH: dict[tuple, Factory] = {}
 
 
 def shape(rule: Rule) -> Shape:
@@ -125,6 +126,19 @@ def split_code(rule: Rule, form: Shape, seed: int, cut: int) -> tuple[Factory, F
         compiler = _compiler(rule, form)
         found = (compiler.prefix(seed, cut), compiler.suffix(seed, cut))
         _keep(_SPLIT, key, found)
+    return found
+
+
+def batch_code(rule: Rule, form: Shape, seed: int, cut: int) -> Factory:
+    """Return the suffix of `split_code` for a batch of rules of this shape (`suffixes`).
+
+    Compiled the first time a shape is batched there, as `code_of`.
+    """
+    key = (form.key, seed, cut)
+    found = _BATCH.get(key)
+    if found is None:
+        found = _compiler(rule, form).suffixes(seed, cut)
+        _keep(_BATCH, key, found)
     return found
 
 

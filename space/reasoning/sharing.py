@@ -20,7 +20,7 @@ from itertools import pairwise
 from typing import TYPE_CHECKING
 
 from space.reasoning.joins import Factory, Partial, Plan, Trigger
-from space.reasoning.rulecode import Shape, split_code
+from space.reasoning.rulecode import Shape, batch_code, split_code
 from space.reasoning.triples import T
 
 if TYPE_CHECKING:  # compile files the joins and imports this module
@@ -44,6 +44,7 @@ class Candidate:
     ids: tuple[int, ...]  # the engine's term ids of the rule's constants (K0, K1...)
     factory: Factory  # the whole join
     bind: Callable[[Factory], Callable]  # the rule's code -> the engine's function
+    runs: tuple  # the rule's body builtins (B0, B1...)
 
     def steps(self) -> tuple[tuple, ...]:
         """Return the plan with the constants' term ids: equal for joins that start alike."""
@@ -61,12 +62,16 @@ def share(candidates: list[Candidate], triples: set[T]) -> int:
         buckets.setdefault(id(candidate.bucket), []).append(candidate)
     shared = 0
     for members in buckets.values():
+        batched: list[int] = []  # positions a batch's leader runs for
         for prefix, group in _groups(members).items():
-            _rewire(group, len(prefix), triples)
+            batched += _rewire(group, len(prefix), triples)
             shared += len(group)
+        bucket = members[0].bucket
         for member in members:
-            if member.bucket[member.position][1] is None:  # shares nothing
-                member.bucket[member.position] = (member.compiled, member.bind(member.factory))
+            if bucket[member.position][1] is None and member.position not in batched:
+                bucket[member.position] = (member.compiled, member.bind(member.factory))
+        for position in sorted(batched, reverse=True):
+            del bucket[position]
     return shared
 
 
@@ -116,16 +121,55 @@ class _Found:
         self.size = -1
 
 
-def _rewire(group: list[Candidate], cut: int, triples: set[T]) -> None:
-    """Bind the group's joins in their bucket: the leader's (the first), then its followers'."""
+def _rewire(group: list[Candidate], cut: int, triples: set[T]) -> list[int]:
+    """Bind the group's joins in their bucket: the leader's (the first), then its followers'.
+
+    Returns the followers' positions when the group is one batch (`_batchable`): the
+    leader's entry runs them all, theirs go.
+    """
     group.sort(key=lambda m: m.position)
     leader = group[0]
-    prefix = leader.bind(split_code(leader.compiled.rule, leader.form, leader.seed, cut)[0])
+    rule, form, seed = leader.compiled.rule, leader.form, leader.seed
+    prefix = leader.bind(split_code(rule, form, seed, cut)[0])
+    if _batchable(group):
+        members = tuple((m.compiled, m.ids) for m in group)
+        batch = _batch(prefix, leader.bind(batch_code(rule, form, seed, cut)), members)
+        leader.bucket[leader.position] = (None, batch)
+        return [m.position for m in group[1:]]
     found = _Found()
     for member in group:
         suffix = member.bind(split_code(member.compiled.rule, member.form, member.seed, cut)[1])
         join = _join(prefix, suffix, found, triples, member is leader)
         member.bucket[member.position] = (member.compiled, join)
+    return []
+
+
+def _batchable(group: list[Candidate]) -> bool:
+    """Tell whether one call can join the group: production rules (they change nothing
+    while joins run), of one shape and builtins, side by side in their bucket."""
+    leader = group[0]
+    return all(
+        m.compiled.production
+        and m.form.key == leader.form.key
+        and m.seed == leader.seed
+        and m.runs == leader.runs
+        and m.position == leader.position + i
+        for i, m in enumerate(group)
+    )
+
+
+def _batch(prefix: Callable, suffixes: Callable, members: tuple) -> Trigger:
+    """Return a batch's join: the prefix once, then every member's suffix in one call,
+    each member's matches as `(rule, matches)`, in the members' (the bucket's) order."""
+    partials: list[Partial] = []
+
+    def join(s: int, p: int, o: int, out: list) -> None:
+        prefix(s, p, o, partials)
+        if partials:
+            suffixes(partials, out, members)
+            partials.clear()
+
+    return join
 
 
 def _join(
