@@ -99,9 +99,10 @@ class ChangeLog:
         removed: list[TripleChange] = []
         by_rules: tuple[list[Triple], list[Triple]] = ([], [])
         inferred: tuple[list[Triple], list[Triple]] = ([], [])
-        functors, triples, asserted = self._terms.functors, self._triples, self._asserted
-        hidden, shown = self._terms.hidden, self._terms.shown
-        expected, decode = self._expected, self._terms.triple
+        triples, asserted, expected = self._triples, self._asserted, self._expected
+        functors, hidden, shown = self._terms.functors, self._terms.hidden, self._terms.shown
+        filtered = bool(functors or hidden)
+        names = self._terms.names  # decoded here, not by a call per triple
         for t, (was_present, was_asserted) in self._before.items():
             is_present, is_asserted = t in triples, t in asserted
             # Checked before the net change: a caller's triple that rules took
@@ -110,9 +111,10 @@ class ChangeLog:
             by_rule = is_asserted != expected.get(t, was_asserted)
             if is_present == was_present and is_asserted == was_asserted and not by_rule:
                 continue
-            if t[2] in functors or (hidden and not shown(t)):
+            if filtered and (t[2] in functors or (hidden and not shown(t))):
                 continue
-            triple = decode(t)
+            s, p, o = t
+            triple = (names[s], names[p], names[o])
             if is_present != was_present:
                 now = is_asserted if is_present else was_asserted
                 change = _new_change(TripleChange, (triple, _ASSERTED if now else _INFERRED))

@@ -48,7 +48,7 @@ class CompiledRule:
 
 Entry = tuple[CompiledRule | None, Trigger]
 """A join and its rule; None for a batch of production rules (`sharing`), whose join
-appends `(rule, matches)` pairs."""
+appends `(rule, match)` pairs."""
 
 
 class RuleIndex:

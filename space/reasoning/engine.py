@@ -281,9 +281,8 @@ class RuleEngine(EngineReads):
                     continue
                 if compiled is None:  # a batch of production rules (`sharing`)
                     if self._production:
-                        for rule, matches in out:
-                            for match in matches:
-                                agenda.push(rule, match)
+                        for rule, match in out:
+                            agenda.push(rule, match)
                 elif compiled.production:
                     if self._production:
                         for match in out:

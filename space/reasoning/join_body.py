@@ -90,10 +90,12 @@ class JoinBody:
         cut: int | None = None,
         *,
         suffix: bool = False,
+        tag: str = "",
     ) -> None:
         self.compiler = compiler
         self.cut = cut
         self.suffix = suffix
+        self.tag = tag  # a name each match is appended beside (a batch's rule, `sharing`)
         self.keys: list[tuple[tuple, tuple[int, ...]]] = []  # the plan so far
         self.canon: dict[Var, int] = {}  # variables by first binding, as the plan numbers them
         self.shareable = True
@@ -152,7 +154,8 @@ class JoinBody:
         values = [None] * len(self.slots)
         for var, slot in self.slots.items():
             values[slot] = self.bound.get(var, "None")
-        self.src.emit(f"out.append((({premises}), ({''.join(f'{v}, ' for v in values)})))")
+        match = f"(({premises}), ({''.join(f'{v}, ' for v in values)}))"
+        self.src.emit(f"out.append(({self.tag}, {match}))" if self.tag else f"out.append({match})")
         return self.src.lines
 
     def _key(self, term: Term | None, constants: list[int]) -> tuple:

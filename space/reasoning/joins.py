@@ -20,6 +20,7 @@ rules whose joins start with the same steps run those steps once (`sharing`):
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 
 from rdflib.term import Node
@@ -99,21 +100,21 @@ class JoinCompiler:
         gen = JoinBody(self, self.rule, self.slots, cut, suffix=True)
         return self._define("_suffix", "partials, out", gen.trigger(seed))
 
-    def suffixes(self, seed: int, cut: int) -> Factory:
-        """Return `suffix` for a batch of rules of this shape, in one call: each member
-        `(rule, K)` gives its constants; a member's matches are appended as `(rule, matches)`.
+    def suffixes(self, seed: int, cut: int) -> tuple[Factory, tuple[int, ...]]:
+        """Return `suffix` for a batch of rules of this shape, in one call, and the K it reads.
+
+        Each member is `(rule, constants)`, its term ids of those K in that order; every
+        match is appended as `(rule, match)`, member after member.
         """
-        gen = JoinBody(self, self.rule, self.slots, cut, suffix=True)
-        constants = "".join(f"K{i}, " for i in range(len(self.constants)))
+        gen = JoinBody(self, self.rule, self.slots, cut, suffix=True, tag="RULE")
+        lines = gen.trigger(seed)
+        used = tuple(sorted({int(k) for line in lines for k in re.findall(r"\bK(\d+)\b", line)}))
         body = [
             "    for RULE, K in members:",
-            *([f"        {constants}= K"] if constants else []),
-            "        out = []",
-            *("    " + line for line in gen.trigger(seed)),
-            "        if out:",
-            "            found.append((RULE, out))",
+            *([f"        {''.join(f'K{i}, ' for i in used)}= K"] if used else []),
+            *("    " + line for line in lines),
         ]
-        return self._define("_suffixes", "partials, found, members", body, constants=False)
+        return self._define("_suffixes", "partials, out, members", body, constants=False), used
 
     def heads(self) -> Factory:
         """Return a function that instantiates the head patterns from bindings."""

@@ -55,7 +55,7 @@ class Shape:
 
 _CODE: dict[tuple, RuleCode] = {}
 _SPLIT: dict[tuple, tuple[Factory, Factory]] = {}
-_BATCH: dict[tuple, Factory] = {}
+_BATCH: dict[tuple, tuple[Factory, tuple[int, ...]]] = {}
 
 
 def shape(rule: Rule) -> Shape:
@@ -129,8 +129,9 @@ def split_code(rule: Rule, form: Shape, seed: int, cut: int) -> tuple[Factory, F
     return found
 
 
-def batch_code(rule: Rule, form: Shape, seed: int, cut: int) -> Factory:
-    """Return the suffix of `split_code` for a batch of rules of this shape (`suffixes`).
+def batch_code(rule: Rule, form: Shape, seed: int, cut: int) -> tuple[Factory, tuple[int, ...]]:
+    """Return the suffix of `split_code` for a batch of rules of this shape, and the
+    constants each member gives it (`JoinCompiler.suffixes`).
 
     Compiled the first time a shape is batched there, as `code_of`.
     """

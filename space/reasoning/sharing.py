@@ -132,8 +132,9 @@ def _rewire(group: list[Candidate], cut: int, triples: set[T]) -> list[int]:
     rule, form, seed = leader.compiled.rule, leader.form, leader.seed
     prefix = leader.bind(split_code(rule, form, seed, cut)[0])
     if _batchable(group):
-        members = tuple((m.compiled, m.ids) for m in group)
-        batch = _batch(prefix, leader.bind(batch_code(rule, form, seed, cut)), members)
+        suffixes, used = batch_code(rule, form, seed, cut)
+        members = tuple((m.compiled, tuple(m.ids[k] for k in used)) for m in group)
+        batch = _batch(prefix, leader.bind(suffixes), members)
         leader.bucket[leader.position] = (None, batch)
         return [m.position for m in group[1:]]
     found = _Found()
@@ -160,7 +161,7 @@ def _batchable(group: list[Candidate]) -> bool:
 
 def _batch(prefix: Callable, suffixes: Callable, members: tuple) -> Trigger:
     """Return a batch's join: the prefix once, then every member's suffix in one call,
-    each member's matches as `(rule, matches)`, in the members' (the bucket's) order."""
+    each match as `(rule, match)`, in the members' (the bucket's) order."""
     partials: list[Partial] = []
 
     def join(s: int, p: int, o: int, out: list) -> None:

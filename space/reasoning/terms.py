@@ -93,6 +93,11 @@ class TermTable:
             return False
         return not hidden or (t[0] not in hidden and t[1] not in hidden and t[2] not in hidden)
 
+    @property
+    def names(self) -> list[Value]:
+        """Return the terms by id (read only): for loops that decode many triples."""
+        return self._terms
+
     def term(self, i: int) -> Value:
         """Return the term of an id."""
         return self._terms[i]
