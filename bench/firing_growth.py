@@ -1,0 +1,141 @@
+"""Split the growth of the cost per firing with the number of rules into its causes.
+
+The update of `rules_scaling` (battery -> very low, N rules each firing once) costs
+more per firing at 2,000 rules than at 200. For each size N this measures, on the
+CPU clock, with the collector as the reasoner agent runs it (start frozen):
+
+- the Python calls per firing (cProfile's count, one update): equal at every N means
+  no more rules woken per triple, no longer bucket or agenda walks;
+- the garbage collector's share: the collections of each generation during the
+  update and their CPU time (`gc.callbacks`), per firing;
+- with max(N) rules loaded, an update where only min(N) of them fire (the others'
+  settings are "low" already, so their joins run and stop at `notEqual`): its cost
+  per firing apart from the collector, beside min(N) rules firing in an engine of
+  min(N) rules and max(N) in max(N). The first step is what more rules loaded cost
+  a firing, the second what a bigger update costs it (more live objects than the
+  caches hold).
+
+Run: python bench/firing_growth.py [--runs 20] [--rounds 2] [--sizes 200 2000] [--old DIR]
+
+`--old DIR` measures the checkout in DIR (with its own .venv) round by round with this one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import gc
+import json
+import pstats
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from rdflib import Literal
+from rules_scaling import AC, BATTERY_LOW, BATTERY_NORMAL, as_the_reasoner_runs, prepared_engine
+
+
+def settings(n: int, value: str) -> list:
+    return [(AC.robot1_base, AC[f"setting_{i}"], Literal(value)) for i in range(n)]
+
+
+def measure(rules: int, firing: int, runs: int) -> dict[str, float]:
+    """Time the update on an engine of `rules` rules of which `firing` fire; split out the gc."""
+    engine = prepared_engine(rules)
+    lows, normals = settings(rules, "low"), settings(rules, "normal")
+    # Before each update: the battery normal, the first `firing` settings normal, the rest low.
+    ready = (
+        [BATTERY_NORMAL, *normals[:firing], *lows[firing:]],
+        [BATTERY_LOW, *lows[:firing], *normals[firing:]],
+    )
+    spent, collections = [0.0], [0, 0, 0]
+    started = [0.0]
+
+    def watch(phase: str, info: dict) -> None:
+        if phase == "start":
+            collections[info["generation"]] += 1
+            started[0] = time.process_time()
+        else:
+            spent[0] += time.process_time() - started[0]
+
+    totals, collected = [], []
+    with as_the_reasoner_runs():
+        for _ in range(runs):
+            engine.apply(added=ready[0], removed=ready[1])
+            spent[0] = 0.0
+            gc.callbacks.append(watch)
+            start = time.process_time()
+            delta = engine.apply(added=[BATTERY_LOW], removed=[BATTERY_NORMAL])
+            totals.append(time.process_time() - start)
+            gc.callbacks.remove(watch)
+            collected.append(spent[0])
+            if len(delta.firings) != firing:
+                raise SystemExit(f"{rules} rules: {len(delta.firings)} firings, not {firing}")
+    engine.apply(added=ready[0], removed=ready[1])
+    profile = cProfile.Profile()
+    profile.enable()
+    engine.apply(added=[BATTERY_LOW], removed=[BATTERY_NORMAL])
+    profile.disable()
+    calls = sum(row[1] for row in pstats.Stats(profile).stats.values())  # type: ignore[attr-defined]
+    per = 1e6 / firing
+    apart = [t - c for t, c in zip(totals, collected, strict=True)]
+    return {
+        "rules": rules,
+        "firing": firing,
+        "us_per_firing": statistics.median(totals) * per,
+        "gc_us_per_firing": statistics.median(collected) * per,
+        "no_gc_us_per_firing": statistics.median(apart) * per,
+        "calls_per_firing": calls / firing,
+        **{f"gen{g}_per_update": c / runs for g, c in enumerate(collections)},
+    }
+
+
+def child(sizes: list[int], runs: int) -> None:
+    """Measure every case on this interpreter's `space`; print JSON lines."""
+    small, big = min(sizes), max(sizes)
+    cases = [(n, n) for n in sizes] + [(big, small)]
+    for rules, firing in cases:
+        print(json.dumps(measure(rules, firing, runs)), flush=True)
+
+
+def main(options: argparse.Namespace) -> None:
+    codes = {"new": Path(sys.executable)}
+    if options.old:
+        codes["old"] = options.old / ".venv" / "bin" / "python"
+    found: dict[tuple, list[dict]] = {}
+    for _ in range(options.rounds):
+        for code, python in codes.items():
+            command = [str(python), __file__, "--child", "--runs", str(options.runs), "--sizes"]
+            done = subprocess.run(
+                command + [str(n) for n in options.sizes], capture_output=True, text=True
+            )
+            if done.returncode != 0:
+                raise SystemExit(f"{python} failed:\n{done.stderr[-3000:]}")
+            for line in done.stdout.splitlines():
+                row = json.loads(line)
+                found.setdefault((code, row["rules"], row["firing"]), []).append(row)
+    keys = ["us_per_firing", "no_gc_us_per_firing", "gc_us_per_firing", "calls_per_firing"]
+    keys += ["gen0_per_update", "gen1_per_update", "gen2_per_update"]
+    print("CPU us per firing (median of the rounds' medians); collections per update")
+    print(f"{'code':>5} {'rules':>6} {'firing':>6} " + " ".join(f"{k[:18]:>18}" for k in keys))
+    for (code, rules, firing), rows in found.items():
+        values = [statistics.median(r[k] for r in rows) for k in keys]
+        print(f"{code:>5} {rules:>6} {firing:>6} " + " ".join(f"{v:18.2f}" for v in values))
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=20, help="updates per case and round")
+    parser.add_argument("--rounds", type=int, default=2, help="alternations of the codes")
+    parser.add_argument("--sizes", type=int, nargs="+", default=[200, 2000])
+    parser.add_argument("--old", type=Path, help="a checkout (with .venv) to measure beside")
+    parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    options = parser.parse_args()
+    if options.child:
+        child(options.sizes, options.runs)
+    else:
+        main(options)
