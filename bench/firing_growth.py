@@ -15,7 +15,7 @@ CPU clock, with the collector as the reasoner agent runs it (start frozen):
   a firing, the second what a bigger update costs it (more live objects than the
   caches hold).
 
-Run: python bench/firing_growth.py [--runs 20] [--rounds 2] [--sizes 200 2000] [--old DIR]
+Run: python bench/firing_growth.py [--runs 20] [--rounds 2] [--sizes 200 2000] [--old DIR] [--json]
 
 `--old DIR` measures the checkout in DIR (with its own .venv) round by round with this one.
 """
@@ -120,6 +120,17 @@ def main(options: argparse.Namespace) -> None:
                 found.setdefault((code, row["rules"], row["firing"]), []).append(row)
     keys = ["us_per_firing", "no_gc_us_per_firing", "gc_us_per_firing", "calls_per_firing"]
     keys += ["gen0_per_update", "gen1_per_update", "gen2_per_update"]
+    if options.json:
+        for (code, rules, firing), rows in found.items():
+            medians = {k: round(statistics.median(r[k] for r in rows), 3) for k in keys}
+            print(
+                json.dumps(
+                    {"case": "update", "code": code, "rules": rules, "firing": firing}
+                    | medians
+                    | {"clock": "CPU"}
+                )
+            )
+        return
     print("CPU us per firing (median of the rounds' medians); collections per update")
     print(f"{'code':>5} {'rules':>6} {'firing':>6} " + " ".join(f"{k[:18]:>18}" for k in keys))
     for (code, rules, firing), rows in found.items():
@@ -133,6 +144,7 @@ if __name__ == "__main__":
     parser.add_argument("--rounds", type=int, default=2, help="alternations of the codes")
     parser.add_argument("--sizes", type=int, nargs="+", default=[200, 2000])
     parser.add_argument("--old", type=Path, help="a checkout (with .venv) to measure beside")
+    parser.add_argument("--json", action="store_true", help="one JSON object per line per case")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     options = parser.parse_args()
     if options.child:
