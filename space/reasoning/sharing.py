@@ -62,16 +62,16 @@ def share(candidates: list[Candidate], triples: set[T]) -> int:
         buckets.setdefault(id(candidate.bucket), []).append(candidate)
     shared = 0
     for members in buckets.values():
-        batched: list[int] = []  # positions a batch's leader runs for
+        batched: set[int] = set()  # positions a batch's leader runs for
         for prefix, group in _groups(members).items():
-            batched += _rewire(group, len(prefix), triples)
+            batched.update(_rewire(group, len(prefix), triples))
             shared += len(group)
         bucket = members[0].bucket
         for member in members:
             if bucket[member.position][1] is None and member.position not in batched:
                 bucket[member.position] = (member.compiled, member.bind(member.factory))
-        for position in sorted(batched, reverse=True):
-            del bucket[position]
+        if batched:
+            bucket[:] = [entry for i, entry in enumerate(bucket) if i not in batched]
     return shared
 
 
