@@ -165,10 +165,10 @@ def _batch(prefix: Callable, suffixes: Callable, members: tuple) -> Trigger:
     partials: list[Partial] = []
 
     def join(s: int, p: int, o: int, out: list) -> None:
+        partials.clear()  # first: a builtin that raised in the last call left its partials
         prefix(s, p, o, partials)
         if partials:
             suffixes(partials, out, members)
-            partials.clear()
 
     return join
 
