@@ -121,6 +121,34 @@ def test_a_head_added_between_two_rules_of_a_group_is_seen_by_the_second():
     assert _firings(deltas[0]) == _firings(deltas[1])
 
 
+def test_production_rules_of_one_shape_join_as_one_batch_and_fire_as_their_own_joins_would():
+    # The paper's rules: one shape, a setting each. Two robots: the shared start finds two.
+    rules = "".join(
+        f'[set{i}: (?r rdf:type ex:Robot), (?r ex:has ?b), (?b ex:level "low"),'
+        f' (?r ex:setting{i} ?v), notEqual(?v, "low") -> drop(3), (?r ex:setting{i} "low")]\n'
+        for i in range(4)
+    )
+    batched, plain = engine(rules), _without_sharing(lambda: engine(rules))
+    buckets = [*batched._index.by_po.values(), *batched._index.by_p.values()]
+    assert any(compiled is None for bucket in buckets for compiled, _ in bucket)  # a batch
+    normal = Literal("normal")
+    data = [*ROBOT, (EX.r1, EX.setting0, normal), (EX.r1, EX.setting2, LOW)]
+    data += [(EX.r1, EX.setting3, normal), (EX.r2, EX.setting1, normal)]
+    data += [(EX.r2, EX.setting3, normal)]
+    for e in (batched, plain):
+        e.load(data)
+    change = [(EX.b1, EX.level, LOW), (EX.b2, EX.level, LOW)]
+    deltas = [e.apply(added=change) for e in (batched, plain)]
+    assert _firings(deltas[0]) == _firings(deltas[1])
+    fired = [(f.rule, f.asserted[0][0]) for f in deltas[0].firings]
+    assert sorted(fired) == sorted(
+        [("set0", EX.r1), ("set1", EX.r2), ("set3", EX.r1), ("set3", EX.r2)]
+    )
+    assert [rule for rule, _ in fired] == ["set0", "set1", "set3", "set3"]  # rule order
+    assert set(batched.match(None, None, None)) == set(plain.match(None, None, None))
+    assert not set(batched.match(None, None, normal))
+
+
 def _without_sharing(build):
     """Build an engine whose joins share nothing: the engine as it was before sharing."""
     groups = sharing._groups
