@@ -60,6 +60,7 @@ def _reads(root: str) -> list[dict]:
                 f"{root}/**",
                 f"{space}/@/changes",
                 f"{space}/@/changes/*/*",
+                f"{space}/@/changes/end",
                 f"{space}/@/seq",
                 f"{root}/@cluster/*",
             ],

@@ -23,6 +23,9 @@ from space.keys import escape
 from space.terms import CACHED, to_nt
 
 HEADER = ("v", "id", "agent", "ts", "cause", "seq", "lifespan")  # repeated in every part
+# A changeset cut into BURST parts or more is followed by its end (`keys.end_key`): a scoped
+# subscriber delivers its parts of it as one change when the end comes, not part by part.
+BURST = 8
 
 Part = dict  # a changeset map: the header of its changeset, the triples of one key
 PartKey = tuple[str, str]  # (subject chunk, predicate chunk)

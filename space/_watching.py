@@ -73,6 +73,9 @@ class Watching(Handle):
         try:
             for key in sub_keys:
                 sub.attach(self.session.declare_subscriber(key, self._dispatcher.feed(sub)))
+            if isinstance(sub, ScopedSubscription):
+                end = keys.end_key(self.space)
+                sub.attach(self.session.declare_subscriber(end, sub.on_end(self.session)))
             if snapshot:
                 reply = self._snapshot(t, timeout)
                 seq = int(reply.get("seq") or 0)

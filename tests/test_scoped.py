@@ -241,6 +241,50 @@ def test_a_changeset_of_many_parts_is_delivered_in_few_changes(ts):
     assert len(seen) <= 15, f"3 changesets delivered in {len(seen)} changes"  # 55-91 without `n`
 
 
+def test_a_changeset_of_many_parts_is_delivered_at_its_end_not_after_a_hold(ts, monkeypatch):
+    # The store publishes a changeset's end after its parts: each subscriber of a scope
+    # delivers the parts it has heard as soon as the end came back through it. With
+    # holds far longer than the test's deadline, only the end can make the delivery.
+    import space._subscription
+
+    monkeypatch.setattr(space._subscription, "IDLE", 60.0)
+    monkeypatch.setattr(space._subscription, "HOLD_MAX", 60.0)
+
+    def settings(value: str) -> list:
+        return [(AC.robot1_base, AC[f"setting_{i}"], Literal(value)) for i in range(200)]
+
+    robot = [(AC.robot1, AC[f"status_{i}"], Literal("ok")) for i in range(20)]
+    seen: list = []
+    ts.subscribe(None, seen.append, scope=[*SCOPE, (None, AC.crowd_level)])
+    ack = ts.write([*settings("low"), *robot, (AC.hall, AC.crowd_level, Literal("high"))])
+    wait_for(lambda: sum(len(c.added) for c in seen) >= 221, what="221 of 222 parts", timeout=10)
+    assert len(seen) == 1 and seen[0].seq == ack.seq  # robot1's, robot1_base's, the hall's
+
+
+def test_a_lost_end_costs_a_hold_not_the_parts():
+    # No end comes (a cut, say): the parts of a changeset of many are delivered when no
+    # more came for IDLE, as one change.
+    from space._parts import split
+    from space._scoped import ScopedSubscription
+    from space._subscription import IDLE, Dispatcher
+    from space.template import Template
+
+    triples = [[f"<{AC_NS}robot1_base>", f"<{AC_NS}setting_{i}>", '"low"'] for i in range(20)]
+    wire = {"v": 1, "id": "c1", "agent": "w", "ts": "1/x", "seq": 1, "add": triples}
+    seen: list = []
+    dispatcher = Dispatcher(lambda first, last: ([], 0))
+    sub = ScopedSubscription(dispatcher, Template.of(None), seen.append, space="s", selectors=["*/*"])
+    sub.start(1)
+    dispatcher.add(sub)
+    dispatcher.mark_ready(sub, 0)
+    for (s, p), part in split(wire).items():
+        part |= {"prev": 0, "n": 20}
+        dispatcher._queue.put((sub, (f"tspace/s/@/changes/{s}/{p}", pack(part))))
+    wait_for(lambda: seen, what="the parts, after the hold", timeout=10 + IDLE)
+    dispatcher.close()
+    assert len(seen) == 1 and len(seen[0].added) == 20
+
+
 def test_a_robots_hw_monitor_hears_its_robot_and_the_site_not_the_fleet_nor_records(ts):
     from agents.base import robot_scope
     from agents.firings import FiringLog
