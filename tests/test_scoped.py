@@ -273,7 +273,9 @@ def test_a_lost_end_costs_a_hold_not_the_parts():
     wire = {"v": 1, "id": "c1", "agent": "w", "ts": "1/x", "seq": 1, "add": triples}
     seen: list = []
     dispatcher = Dispatcher(lambda first, last: ([], 0))
-    sub = ScopedSubscription(dispatcher, Template.of(None), seen.append, space="s", selectors=["*/*"])
+    sub = ScopedSubscription(
+        dispatcher, Template.of(None), seen.append, space="s", selectors=["*/*"]
+    )
     sub.start(1)
     dispatcher.add(sub)
     dispatcher.mark_ready(sub, 0)
