@@ -71,11 +71,11 @@ class Watching(Handle):
         self._dispatcher.add(sub)
         self._subscriptions.add(sub)
         try:
-            for key in sub_keys:
-                sub.attach(self.session.declare_subscriber(key, self._dispatcher.feed(sub)))
-            if isinstance(sub, ScopedSubscription):
+            if isinstance(sub, ScopedSubscription):  # ends first: none after a part is missed
                 end = keys.end_key(self.space)
                 sub.attach(self.session.declare_subscriber(end, sub.on_end(self.session)))
+            for key in sub_keys:
+                sub.attach(self.session.declare_subscriber(key, self._dispatcher.feed(sub)))
             if snapshot:
                 reply = self._snapshot(t, timeout)
                 seq = int(reply.get("seq") or 0)
