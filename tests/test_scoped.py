@@ -294,7 +294,7 @@ def test_a_robots_hw_monitor_hears_its_robot_and_the_site_not_the_fleet_nor_reco
 
     seen = []
     ts.subscribe(None, seen.append, scope=robot_scope(AC.robot1, HwMonitor.shared))
-    record, _dropped = FiringLog().record("some_rule", "cause-1", AC.robot1)
+    record, _dropped = FiringLog().record(["some_rule"], "cause-1", AC.robot1)
     ts.write(record)  # the reasoner's record about robot1: not for its agents
     ts.write([level(2, "low"), (AC.robot2, AC.location, AC.hall)])  # another robot's
     ts.write([(AC.hall, AC.crowd_level, Literal("high"))])  # the site: its lasers see it
