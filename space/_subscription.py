@@ -194,8 +194,8 @@ _BATCH = 1000  # queued items handled before their changes are delivered
 # on one change. While a subscription waits for the end of such a changeset (`waiting`,
 # see `space._scoped`), delivery waits; should the end be lost, until no item came for
 # IDLE, HOLD_MAX in all.
-IDLE = 0.005
-HOLD_MAX = 0.05
+IDLE = 0.02
+HOLD_MAX = 0.2
 
 
 @dataclass(frozen=True)
