@@ -112,8 +112,11 @@ class ScopedSubscription(Subscription):
             if not isinstance(seq, int) or isinstance(seq, bool):
                 log.warning("end of changeset with a seq not an integer skipped: %r", seq)
                 return
-            for key, _n in self._through:
-                session.put(key, str(seq), attachment=self._token, allowed_destination=local)
+            try:
+                for key, _n in self._through:
+                    session.put(key, str(seq), attachment=self._token, allowed_destination=local)
+            except zenoh.ZError as exc:  # the session closing: nothing waits any more
+                log.debug("end of changeset %d not sent back: %s", seq, exc)
 
         return callback
 
