@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import logging
 import os
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -67,6 +68,7 @@ class ScopedSubscription(Subscription):
         self._exprs = [zenoh.KeyExpr(k) for k in self.keys]
         self.horizon = 0  # the highest seq the store itself said it reached
         self._last: dict[str, int] = {}  # part key -> seq of the last part delivered on it
+        self._patterns = [_patterns(s) for s in selectors]  # (subject, predicate) chunk matchers
         self._token = os.urandom(8)  # marks this subscription's own samples of ends
         self._through = _through(self.keys)
         self._expected = sum(n for _key, n in self._through)  # samples of one end to come back
@@ -111,6 +113,8 @@ class ScopedSubscription(Subscription):
                 return
             if not isinstance(seq, int) or isinstance(seq, bool):
                 log.warning("end of changeset with a seq not an integer skipped: %r", seq)
+                return
+            if not self._concerned(end):  # type: ignore[arg-type]
                 return
             try:
                 for key, _n in self._through:
@@ -169,6 +173,19 @@ class ScopedSubscription(Subscription):
             log.warning("malformed change skipped: %s", exc)
             return False
         return True
+
+    def _concerned(self, end: dict) -> bool:
+        """Return whether parts of an end's changeset may be for us: False only if surely not.
+
+        The end names its changeset's subjects and predicates (if few): no selector
+        matching one of each, no part of it was ours, and nothing needs sending back.
+        """
+        subjects, predicates = end.get("s"), end.get("p")
+        if not (isinstance(subjects, list) and isinstance(predicates, list)):
+            return True
+        if not all(isinstance(x, str) for x in subjects + predicates):
+            return True
+        return any(any(map(s, subjects)) and any(map(p, predicates)) for s, p in self._patterns)
 
     def receive(self, item: object, fetch: Fetch) -> list[Received]:
         """Return what to deliver for a received part, the missed parts first.
@@ -282,6 +299,24 @@ class Ended:
 
 
 _ENDS = 64  # changesets whose end is partly back, at most (more: the oldest were lost)
+
+Matcher = Callable[[str], object]  # truthy for a key chunk a selector's chunk matches
+
+
+def _patterns(selector: str) -> tuple[Matcher, Matcher]:
+    """Return matchers of the subject and predicate chunks a selector `<s>/<p>` selects."""
+    return tuple(_matcher(chunk) for chunk in selector.split("/"))  # type: ignore[return-value]
+
+
+def _matcher(chunk: str) -> Matcher:
+    """Return a matcher of the key chunks one chunk of a key expression matches.
+
+    `*` matches any chunk, `$*` any text within one (as Zenoh has them); a part's
+    chunks never start with `@`, so verbatim chunks need no care here.
+    """
+    if chunk == "*":
+        return bool
+    return re.compile(".*".join(re.escape(piece) for piece in chunk.split("$*")), re.S).fullmatch
 
 
 def _through(part_keys: list[str]) -> list[tuple[str, int]]:

@@ -4,7 +4,7 @@ A robot's agents select their robot's keys (`@/changes/<...%23robot7_$*>/*`) and
 Zenoh delivers them nothing else. Each part names the seq of the previous
 changeset with a part on its key (`prev`), so a subscriber tells a missed part
 from a key that was quiet. After the parts of a changeset of `BURST` parts or
-more it publishes the changeset's end, `{"seq": ...}` on `keys.end_key`, from the
+more it publishes the changeset's end (`space._parts.end`) on `keys.end_key`, from the
 same session: Zenoh keeps one session's messages of one priority and
 reliability in order, so a subscriber that hears the end has heard every part
 before it (see `space._scoped`). The store keeps the last seq of each key in memory;
@@ -21,7 +21,7 @@ import logging
 import zenoh
 
 from space import keys
-from space._parts import BURST, split
+from space._parts import BURST, end, split
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload
 from space.store.state import Net, SpaceState
@@ -89,7 +89,7 @@ class PartPublisher:
                 part["n"] = len(parts)
                 self.session.put(key, pack(part), congestion_control=block)
         if send and len(parts) >= BURST:
-            self._end(space).put(pack({"seq": seq}))
+            self._end(space).put(pack(end(seq, parts)))
         if len(last) > MAX_KEYS:
             self._forget(space, last)
 
