@@ -241,7 +241,10 @@ def test_a_changeset_of_many_parts_is_delivered_in_few_changes(ts):
     assert len(seen) <= 15, f"3 changesets delivered in {len(seen)} changes"  # 55-91 without `n`
 
 
-def test_a_changeset_of_many_parts_is_delivered_at_its_end_not_after_a_hold(ts, monkeypatch):
+@pytest.mark.parametrize("settings", [20, 200])  # the end names its 44 keys' chunks, or not
+def test_a_changeset_of_many_parts_is_delivered_at_its_end_not_after_a_hold(
+    ts, monkeypatch, settings
+):
     # The store publishes a changeset's end after its parts: each subscriber of a scope
     # delivers the parts it has heard as soon as the end came back through it. With
     # holds far longer than the test's deadline, only the end can make the delivery.
@@ -249,16 +252,21 @@ def test_a_changeset_of_many_parts_is_delivered_at_its_end_not_after_a_hold(ts, 
 
     monkeypatch.setattr(space._subscription, "IDLE", 60.0)
     monkeypatch.setattr(space._subscription, "HOLD_MAX", 60.0)
-
-    def settings(value: str) -> list:
-        return [(AC.robot1_base, AC[f"setting_{i}"], Literal(value)) for i in range(200)]
-
-    robot = [(AC.robot1, AC[f"status_{i}"], Literal("ok")) for i in range(20)]
+    robot1 = [(AC.robot1_base, AC[f"setting_{i}"], Literal("low")) for i in range(settings)]
+    robot1 += [(AC.robot1, AC[f"status_{i}"], Literal("ok")) for i in range(20)]
+    hall = (AC.hall, AC.crowd_level, Literal("high"))
+    robot2 = [(AC.robot2_base, AC[f"setting_{i}"], Literal("low")) for i in range(20)]
     seen: list = []
+    others: list = []
     ts.subscribe(None, seen.append, scope=[*SCOPE, (None, AC.crowd_level)])
-    ack = ts.write([*settings("low"), *robot, (AC.hall, AC.crowd_level, Literal("high"))])
-    wait_for(lambda: sum(len(c.added) for c in seen) >= 221, what="221 of 222 parts", timeout=10)
-    assert len(seen) == 1 and seen[0].seq == ack.seq  # robot1's, robot1_base's, the hall's
+    ts.subscribe(None, others.append, scope=[("ac:robot3_*", None)])  # none of it
+    ts.write(robot2)  # not robot1's: its end is heard, and ignored
+    ack = ts.write([*robot1, hall])
+    expected = len(robot1) + 1
+    wait_for(lambda: sum(len(c.added) for c in seen) >= expected, what="robot1's parts", timeout=10)
+    assert len(seen) == 1 and seen[0].seq == ack.seq
+    assert set(seen[0].added) == {*robot1, hall}
+    assert others == []
 
 
 def test_a_lost_end_costs_a_hold_not_the_parts():
