@@ -237,9 +237,15 @@ class ScopedSubscription(Subscription):
         self._open.discard(seq)
 
     def behind(self, seq: int, fetch: Fetch) -> list[Received]:
-        """Fetch the log to now on a reconnection or a new leader (`LATEST`); ignore heartbeats."""
+        """Fetch the log to now on a reconnection or a new leader (`LATEST`); ignore heartbeats.
+
+        An end is lost only with its link or its store (Zenoh drops nothing on a link
+        that holds; ends and parts block rather than drop): what waited for one is
+        delivered now.
+        """
         if seq != LATEST:
             return []
+        self._open.clear()
         try:
             return self._fetch(LATEST, fetch)
         except SpaceError as exc:

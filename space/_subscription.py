@@ -192,10 +192,11 @@ _BATCH = 1000  # queued items handled before their changes are delivered
 # A changeset cut into many parts arrives over a few ms, a part at a time: a subscriber
 # that delivered each handful as it came would make its agent act (tick) a dozen times
 # on one change. While a subscription waits for the end of such a changeset (`waiting`,
-# see `space._scoped`), delivery waits; should the end be lost, until no item came for
-# IDLE, HOLD_MAX in all.
-IDLE = 0.02
-HOLD_MAX = 0.2
+# see `space._scoped`), delivery waits. An end is lost only with a link or a store,
+# and their return (`catch_up`) ends the wait; as a last resort, delivery goes on when
+# no item came for IDLE (a loaded store pauses 20-60 ms between parts), HOLD_MAX in all.
+IDLE = 0.2
+HOLD_MAX = 1.0
 
 
 @dataclass(frozen=True)

@@ -269,14 +269,19 @@ def test_a_changeset_of_many_parts_is_delivered_at_its_end_not_after_a_hold(
     assert others == []
 
 
-def test_a_lost_end_costs_a_hold_not_the_parts():
-    # No end comes (a cut, say): the parts of a changeset of many are delivered when no
-    # more came for IDLE, as one change.
+@pytest.mark.parametrize("reconnected", [True, False])
+def test_a_lost_end_costs_a_hold_not_the_parts(monkeypatch, reconnected):
+    # No end comes (a cut): the parts of a changeset of many are delivered as one change
+    # when the link comes back (`catch_up`), or, as a last resort, when no more came for IDLE.
+    import space._subscription
     from space._parts import split
     from space._scoped import ScopedSubscription
-    from space._subscription import IDLE, Dispatcher
+    from space._subscription import Dispatcher
     from space.template import Template
 
+    if reconnected:
+        monkeypatch.setattr(space._subscription, "IDLE", 60.0)
+        monkeypatch.setattr(space._subscription, "HOLD_MAX", 60.0)
     triples = [[f"<{AC_NS}robot1_base>", f"<{AC_NS}setting_{i}>", '"low"'] for i in range(20)]
     wire = {"v": 1, "id": "c1", "agent": "w", "ts": "1/x", "seq": 1, "add": triples}
     seen: list = []
@@ -290,7 +295,9 @@ def test_a_lost_end_costs_a_hold_not_the_parts():
     for (s, p), part in split(wire).items():
         part |= {"prev": 0, "n": 20}
         dispatcher._queue.put((sub, (f"tspace/s/@/changes/{s}/{p}", pack(part))))
-    wait_for(lambda: seen, what="the parts, after the hold", timeout=10 + IDLE)
+    if reconnected:
+        dispatcher.catch_up()
+    wait_for(lambda: seen, what="the parts, without their end", timeout=10)
     dispatcher.close()
     assert len(seen) == 1 and len(seen[0].added) == 20
 
