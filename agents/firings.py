@@ -2,11 +2,13 @@
 
 The firings that answer one changeset for one robot become one
 `ac:RuleFiring` individual (`ac:firing_N`, or `ac:firing_ROBOT_N` from a
-per-robot reasoner) naming each rule that fired (`ac:rule_name`, one per rule),
-the changeset that caused them and the robot they concerned: a change that
-fires 200 rules costs 200 triples of bookkeeping, not 1,000. Only the last
-`keep` records stay in the space: the log is for the HMI's "last rule
-firings", not an archive.
+per-robot reasoner) naming the rules that fired (`ac:rule_names`, one literal:
+their names, space-separated, in firing order), the changeset that caused them
+and the robot they concerned: a record is six triples however many rules fired.
+One triple a rule made a change that fired 200 rules write 200 triples of
+bookkeeping and drop the oldest record's 200, half of the answer the store
+commits. Only the last `keep` records stay in the space: the log is for the
+HMI's "last rule firings", not an archive.
 """
 
 from __future__ import annotations
@@ -22,7 +24,12 @@ from agents.vocabulary import AC, RECORD_PREFIX
 from space import Triple
 
 FIRING_PREFIX = RECORD_PREFIX  # the subjects of firing records
-RULE_NAME = AC.rule_name
+RULE_NAMES = AC.rule_names
+
+
+def rule_names(triples: Iterable[Triple]) -> list[str]:
+    """Return the rule names the firing records among `triples` name, in their order."""
+    return [name for _s, p, o in triples if p == RULE_NAMES for name in str(o).split()]
 
 
 RECORD_TYPES = frozenset({AC.RuleFiring, AC.RuleLoop})
@@ -53,9 +60,7 @@ class FiringLog:
         self.next = 1
         self._records: deque[list[Triple]] = deque()
         self._answering: tuple[str, Node] | None = None
-        self._named: set[str] = set()  # the rule names of the record being answered
-        # One literal per rule name: 200 firings made 200 new Literals (~3 us each) per answer.
-        self._names: dict[str, Literal] = {}
+        self._named: dict[str, None] = {}  # the rule names of the record being answered
 
     def restore(self, triples: Iterable[Triple]) -> None:
         """Take back this log's records from the space (after a restart), numbering after them."""
@@ -73,23 +78,25 @@ class FiringLog:
             self.next = max(self.next, number + 1)
 
     def record(
-        self, rule: str, cause: str | None, robot: Node, when: datetime | None = None
+        self, rules: Iterable[str], cause: str | None, robot: Node, when: datetime | None = None
     ) -> tuple[list[Triple], list[Triple]]:
-        """Add one firing; return (triples to add, triples of records to drop).
+        """Add the firings of `rules` for `robot`; return (triples to add, triples to drop).
 
-        A firing with the same cause and robot as the last one joins its record.
+        Firings with the same cause and robot as the last record join it: its
+        `ac:rule_names` is replaced by one naming the new rules too.
         """
+        named = dict.fromkeys(rules)
         if cause and self._records and self._answering == (cause, robot):
-            if rule in self._named:
+            if named.keys() <= self._named.keys():
                 return [], []
-            self._named.add(rule)
+            self._named |= named
             record = self._records[-1]
-            name = (record[0][0], RULE_NAME, self._name(rule))
-            record.append(name)
-            return [name], []
+            old = record[1]
+            record[1] = (old[0], RULE_NAMES, Literal(" ".join(self._named)))
+            return [record[1]], [old]
         self._answering = (cause, robot) if cause else None
-        self._named = {rule}
-        return self._new(AC.RuleFiring, [rule], cause, robot, when)
+        self._named = named
+        return self._new(AC.RuleFiring, named, cause, robot, when)
 
     def loop(
         self, rules: Iterable[str], cause: str | None, robot: Node, when: datetime | None = None
@@ -110,9 +117,9 @@ class FiringLog:
         when: datetime | None,
     ) -> tuple[list[Triple], list[Triple]]:
         iri = URIRef(f"{self.prefix}{self.next}")
-        triples: list[Triple] = [
+        triples: list[Triple] = [  # the names second: `record` replaces them
             (iri, RDF.type, kind),
-            *((iri, RULE_NAME, self._name(rule)) for rule in rules),
+            (iri, RULE_NAMES, Literal(" ".join(rules))),
             (iri, AC.robot, robot),
             (iri, AC.fired_at, Literal(when or datetime.now(UTC))),
             (iri, AC.firing_seq, Literal(self.next)),
@@ -124,11 +131,4 @@ class FiringLog:
         dropped: list[Triple] = []
         while len(self._records) > self.keep:
             dropped += self._records.popleft()
-        return triples, dropped
-
-    def _name(self, rule: str) -> Literal:
-        """Return the literal of a rule's name (one per name: the rules are few, firings many)."""
-        literal = self._names.get(rule)
-        if literal is None:
-            literal = self._names[rule] = Literal(rule)
-        return literal
+        return list(triples), dropped  # a copy: `record` may change the one kept

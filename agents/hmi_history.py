@@ -18,6 +18,7 @@ from typing import Any
 from rdflib import RDF, Graph, Literal
 from rdflib.term import Node
 
+from agents.firings import rule_names
 from agents.sentences import firing_sentence
 from agents.vocabulary import AC
 from space import Changeset, Triple, triple_to_nt
@@ -117,8 +118,8 @@ class History:
             return []
         rules: dict[Node, list[str]] = {}
         for s, p, o in cs.added:
-            if p == AC.rule_name and s in records:
-                rules.setdefault(records[s], []).append(str(o))
+            if s in records:
+                rules.setdefault(records[s], []).extend(rule_names([(s, p, o)]))
         cause = self._causes.get(cs.cause or "")
         out = []
         for robot, names in rules.items():

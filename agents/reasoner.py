@@ -288,10 +288,12 @@ class Reasoner(Agent):
         concluded = list(delta.asserted_added), list(delta.asserted_removed)
         added, removed = list(concluded[0]), list(concluded[1])
         robots: dict[Node, bool] = {}
+        fired: dict[Node, list[str]] = {}  # robot -> the rules that fired for it, in order
         for firing in delta.firings:
-            new, old = self.firings.record(
-                firing.rule, cause, firing_robot(self.engine, firing, robots, self.robot)
-            )
+            robot = firing_robot(self.engine, firing, robots, self.robot)
+            fired.setdefault(robot, []).append(firing.rule)
+        for robot, rules in fired.items():
+            new, old = self.firings.record(rules, cause, robot)
             added += new
             removed += old
         if loop is not None:

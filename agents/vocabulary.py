@@ -31,7 +31,7 @@ PREFIXES = PrefixMap({"ac": str(AC)})
 
 # Subjects of the reasoner's firing records (`ac:firing_N`, `ac:firing_ROBOT_N`).
 RECORD_PREFIX = str(AC) + "firing_"
-FIRING_PROPERTIES = frozenset({AC.rule_name, AC.cause, AC.fired_at, AC.firing_seq, AC.robot})
+FIRING_PROPERTIES = frozenset({AC.rule_names, AC.cause, AC.fired_at, AC.firing_seq, AC.robot})
 
 
 _LITERALS: dict[tuple[type, str], Literal] = {}

@@ -61,6 +61,7 @@ def _reads(root: str) -> list[dict]:
                 f"{root}/**",
                 f"{space}/@/changes",
                 f"{space}/@/changes/*/*",
+                f"{space}/@/changes/end",
                 f"{space}/@/seq",
                 f"{root}/@cluster/*",
                 f"{space}/@/changes/@adv/**",  # the store's cache's heartbeat

@@ -23,6 +23,10 @@ from space.keys import escape
 from space.terms import CACHED, to_nt
 
 HEADER = ("v", "id", "agent", "ts", "cause", "seq", "lifespan")  # repeated in every part
+# A changeset cut into BURST parts or more is followed by its end (`keys.end_key`): a scoped
+# subscriber delivers its parts of it as one change when the end comes, not part by part.
+BURST = 8
+NAMED = 64  # an end names its changeset's subjects and predicates, up to this many chunks
 
 Part = dict  # a changeset map: the header of its changeset, the triples of one key
 PartKey = tuple[str, str]  # (subject chunk, predicate chunk)
@@ -49,6 +53,19 @@ def split(wire: Mapping) -> dict[PartKey, Part]:
 # A term's key chunk, each text escaped once: a changeset's keys repeat their terms (one
 # subject for 200 settings), and escaping was most of the store's cutting.
 _chunk = lru_cache(maxsize=CACHED)(escape)
+
+
+def end(seq: int, parts: Mapping[PartKey, Part]) -> dict:
+    """Return the end of a changeset cut into `parts`: its seq and, if few, its keys' chunks.
+
+    A subscriber with no selector that matches one of its subjects and one of its
+    predicates then knows at once that no part was for it (`space._scoped`).
+    """
+    subjects = list(dict.fromkeys(s for s, _p in parts))
+    predicates = list(dict.fromkeys(p for _s, p in parts))
+    if len(subjects) + len(predicates) > NAMED:
+        return {"seq": seq}
+    return {"seq": seq, "s": subjects, "p": predicates}
 
 
 def joined(parts: list[Part]) -> Part:

@@ -3,8 +3,10 @@
 It declares one Zenoh subscriber per selector on `@/changes/<s>/<p>` (see
 `space._parts`) and delivers the parts it receives as `Change`s: the parts of
 one changeset that arrive together (the store publishes them in one burst) as
-one, a part that comes late as another with the same id and seq; after a part of
-a changeset of many (`n`), the dispatcher waits a little for the rest. Per key, it
+one, a part that comes late as another with the same id and seq. After a part of
+a changeset of many (`n` >= `BURST`) the dispatcher waits for that changeset's
+end, which the store publishes after its parts (`keys.end_key`): see `on_end`.
+Per key, it
 remembers the seq of the last part delivered; the store's `prev` says which
 seq it should be. When `prev` names one it never saw
 (past `last_seq`, up to which it holds everything selected), it fetches the
@@ -18,14 +20,17 @@ The heartbeat does not (it says the space moved, not whether its keys did).
 from __future__ import annotations
 
 import logging
+import os
+import re
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import zenoh
 from rdflib import BNode, Literal, URIRef
 
 from space import keys
-from space._parts import Part, joined, split, term_chunk
-from space._subscription import BURST, LATEST, Callback, Change, Dispatcher, Fetch, Subscription
+from space._parts import BURST, Part, joined, split, term_chunk
+from space._subscription import LATEST, Callback, Change, Dispatcher, Fetch, Subscription
 from space.changeset import published_seq, unpack
 from space.errors import InputError, MalformedPayload, SpaceError
 from space.prefixes import PrefixMap
@@ -63,10 +68,61 @@ class ScopedSubscription(Subscription):
         self._exprs = [zenoh.KeyExpr(k) for k in self.keys]
         self.horizon = 0  # the highest seq the store itself said it reached
         self._last: dict[str, int] = {}  # part key -> seq of the last part delivered on it
+        self._patterns = [_patterns(s) for s in selectors]  # (subject, predicate) chunk matchers
+        self._token = os.urandom(8)  # marks this subscription's own samples of ends
+        self._through = _through(self.keys)
+        self._expected = sum(n for _key, n in self._through)  # samples of one end to come back
+        self._open: set[int] = set()  # changesets of many parts whose end has not come back
+        self._ends: dict[int, int] = {}  # seq -> samples of its end come back so far
+
+    @property
+    def waiting(self) -> bool:  # type: ignore[override]
+        """Whether parts received belong to a changeset of many whose end has not come."""
+        return bool(self._open)
+
+    def delivered(self) -> None:
+        """Forget the changesets waited for: their parts went out (the end was late or lost)."""
+        self._open.clear()
 
     def item(self, sample: zenoh.Sample) -> object:
-        """Queue the part with its key: the chain is per key."""
-        return str(sample.key_expr), sample.payload.to_bytes()
+        """Queue the part with its key (the chain is per key), or the end come back."""
+        attachment = sample.attachment
+        if attachment is None:
+            return str(sample.key_expr), sample.payload.to_bytes()
+        if attachment.to_bytes() != self._token:
+            return None  # another subscription's end, or not the store's part
+        return Ended(int(sample.payload.to_bytes()))
+
+    def on_end(self, session: zenoh.Session) -> Callable[[zenoh.Sample], None]:
+        """Return the callback of the ends of changesets (`keys.end_key`).
+
+        Zenoh hands this subscriber the end of a changeset after every part before
+        it, but each of our part subscribers passes its samples on from a thread of
+        its own, which may lag. So the end is sent back through each of them, as
+        a sample only this session hears on a key it selects: when all have come
+        back (`receive`), every part of that changeset queued before them.
+        """
+        local = zenoh.Locality.SESSION_LOCAL
+
+        def callback(sample: zenoh.Sample) -> None:
+            try:
+                end = unpack(sample.payload.to_bytes())
+                seq = end["seq"]  # type: ignore[index]
+            except (MalformedPayload, TypeError, KeyError) as exc:
+                log.warning("malformed end of changeset skipped: %s", exc)
+                return
+            if not isinstance(seq, int) or isinstance(seq, bool):
+                log.warning("end of changeset with a seq not an integer skipped: %r", seq)
+                return
+            if not self._concerned(end):  # type: ignore[arg-type]
+                return
+            try:
+                for key, _n in self._through:
+                    session.put(key, str(seq), attachment=self._token, allowed_destination=local)
+            except zenoh.ZError as exc:  # the session closing: nothing waits any more
+                log.debug("end of changeset %d not sent back: %s", seq, exc)
+
+        return callback
 
     def selects(self, triple: Triple) -> bool:
         """Return True for a triple whose (subject, predicate) key this subscription selects."""
@@ -118,12 +174,28 @@ class ScopedSubscription(Subscription):
             return False
         return True
 
+    def _concerned(self, end: dict) -> bool:
+        """Return whether parts of an end's changeset may be for us: False only if surely not.
+
+        The end names its changeset's subjects and predicates (if few): no selector
+        matching one of each, no part of it was ours, and nothing needs sending back.
+        """
+        subjects, predicates = end.get("s"), end.get("p")
+        if not (isinstance(subjects, list) and isinstance(predicates, list)):
+            return True
+        if not all(isinstance(x, str) for x in subjects + predicates):
+            return True
+        return any(any(map(s, subjects)) and any(map(p, predicates)) for s, p in self._patterns)
+
     def receive(self, item: object, fetch: Fetch) -> list[Received]:
         """Return what to deliver for a received part, the missed parts first.
 
         Raises:
             MalformedPayload: not a published part (no id, seq or `prev`).
         """
+        if isinstance(item, Ended):
+            self._ended(item.seq)
+            return []
         key, payload = item  # type: ignore[misc]
         wire = unpack(payload)
         seq = published_seq(wire)
@@ -132,7 +204,6 @@ class ScopedSubscription(Subscription):
         if not isinstance(prev, int) or isinstance(prev, bool) or not 0 <= prev < seq:
             raise MalformedPayload(f"a published part has a 'prev' below its seq, got {prev!r}")
         count = wire.get("n")  # optional: how many parts its changeset was cut into
-        self.bursting = isinstance(count, int) and count >= BURST
         known = max(self.last_seq, self._last.get(key, 0))
         if seq <= known:
             return []
@@ -149,12 +220,32 @@ class ScopedSubscription(Subscription):
                 )
                 return changes
         self._last[key] = seq
-        return changes + self._changes(wire)
+        received = self._changes(wire)
+        if received and isinstance(count, int) and count >= BURST:
+            self._open.add(seq)  # more may come: delivery waits for its end
+        return changes + received
+
+    def _ended(self, seq: int) -> None:
+        """Count a sample of a changeset's end come back; the last one ends the wait for it."""
+        back = self._ends.get(seq, 0) + 1
+        if back < self._expected:
+            if len(self._ends) > _ENDS:  # ends never completed (a subscriber closed, a cut)
+                self._ends.clear()
+            self._ends[seq] = back
+            return
+        self._ends.pop(seq, None)
+        self._open.discard(seq)
 
     def behind(self, seq: int, fetch: Fetch) -> list[Received]:
-        """Fetch the log to now on a reconnection or a new leader (`LATEST`); ignore heartbeats."""
+        """Fetch the log to now on a reconnection or a new leader (`LATEST`); ignore heartbeats.
+
+        An end is lost only with its link or its store (Zenoh drops nothing on a link
+        that holds; ends and parts block rather than drop): what waited for one is
+        delivered now.
+        """
         if seq != LATEST:
             return []
+        self._open.clear()
         try:
             return self._fetch(LATEST, fetch)
         except SpaceError as exc:
@@ -204,6 +295,55 @@ class ScopedSubscription(Subscription):
         if self.skip_agent is not None and wire.get("agent") == self.skip_agent:
             return []
         return [Received(wire["seq"], wire["id"], [wire])]
+
+
+@dataclass(frozen=True)
+class Ended:
+    """The end of a changeset, come back through one of a subscription's part subscribers."""
+
+    seq: int
+
+
+_ENDS = 64  # changesets whose end is partly back, at most (more: the oldest were lost)
+
+Matcher = Callable[[str], object]  # truthy for a key chunk a selector's chunk matches
+
+
+def _patterns(selector: str) -> tuple[Matcher, Matcher]:
+    """Return matchers of the subject and predicate chunks a selector `<s>/<p>` selects."""
+    return tuple(_matcher(chunk) for chunk in selector.split("/"))  # type: ignore[return-value]
+
+
+def _matcher(chunk: str) -> Matcher:
+    """Return a matcher of the key chunks one chunk of a key expression matches.
+
+    `*` matches any chunk, `$*` any text within one (as Zenoh has them); a part's
+    chunks never start with `@`, so verbatim chunks need no care here.
+    """
+    if chunk == "*":
+        return bool
+    return re.compile(".*".join(re.escape(piece) for piece in chunk.split("$*")), re.S).fullmatch
+
+
+def _through(part_keys: list[str]) -> list[tuple[str, int]]:
+    """Return, for each selector's key expression, a key it matches and how many of them do.
+
+    The key is the key expression with its wildcards filled (`*` -> `_`, `$*` -> ``).
+    Empty when a selector has no such key: then ends are not sent back, and delivery
+    waits for the rest of a changeset of many only as long as parts keep coming.
+    """
+    exprs = [zenoh.KeyExpr(k) for k in part_keys]
+    through = []
+    for expr in exprs:
+        chunks_ = [("_" if c == "*" else c.replace("$*", "")) or "_" for c in str(expr).split("/")]
+        try:
+            key = zenoh.KeyExpr("/".join(chunks_))
+        except (zenoh.ZError, ValueError):
+            return []
+        if not expr.intersects(key):
+            return []
+        through.append((str(key), sum(1 for e in exprs if e.intersects(key))))
+    return through
 
 
 @dataclass

@@ -44,7 +44,7 @@ class Subscription:
     their terms are parsed. Close it with `close()` (or `TripleSpace.unsubscribe`).
     """
 
-    bursting = False  # whether the last item received was a part of a changeset of many
+    waiting = False  # whether a change received waits for more of its parts to be delivered
 
     def __init__(
         self,
@@ -77,8 +77,11 @@ class Subscription:
                 steps.callback(subscriber.undeclare)
 
     def item(self, sample: zenoh.Sample) -> object:
-        """Return what the Zenoh callback queues for the dispatcher thread."""
+        """Return what the Zenoh callback queues for the dispatcher thread (None: nothing)."""
         return sample.payload.to_bytes()
+
+    def delivered(self) -> None:
+        """Note that what was received has been delivered: nothing waits any more."""
 
     def decode(self, payload: bytes) -> tuple[int, Changeset | None]:
         """Return a change's sequence number and changeset; None for a changeset skipped unparsed.
@@ -189,11 +192,12 @@ LATEST = 2**62  # "up to the store's current sequence number" in a log request
 _BATCH = 1000  # queued items handled before their changes are delivered
 # A changeset cut into many parts arrives over a few ms, a part at a time: a subscriber
 # that delivered each handful as it came would make its agent act (tick) a dozen times
-# on one change. After a part of a changeset of BURST parts or more (its `n`), delivery
-# waits up to HOLD for the next item, HOLD_MAX in all.
-BURST = 8
-HOLD = 0.0005
-HOLD_MAX = 0.005
+# on one change. While a subscription waits for the end of such a changeset (`waiting`,
+# see `space._scoped`), delivery waits. An end is lost only with a link or a store,
+# and their return (`catch_up`) ends the wait; as a last resort, delivery goes on when
+# no item came for IDLE (a loaded store pauses 20-60 ms between parts), HOLD_MAX in all.
+IDLE = 0.2
+HOLD_MAX = 1.0
 
 
 @dataclass(frozen=True)
@@ -223,7 +227,9 @@ class Dispatcher:
         """
 
         def callback(sample: zenoh.Sample) -> None:
-            self._queue.put((sub, sub.item(sample)))
+            item = sub.item(sample)
+            if item is not None:
+                self._queue.put((sub, item))
 
         return callback
 
@@ -276,9 +282,9 @@ class Dispatcher:
         held = 0.0  # when delivery started waiting for more parts
         while True:
             try:
-                batch = [self._queue.get(timeout=HOLD if held else None)]
+                batch = [self._queue.get(timeout=IDLE if held else None)]
             except queue.Empty:
-                batch = []  # no more parts came: deliver
+                batch = []  # nothing came, not even the end awaited: deliver
             while batch and len(batch) < _BATCH:  # what is queued already is handled, delivered
                 try:
                     batch.append(self._queue.get_nowait())
@@ -290,7 +296,7 @@ class Dispatcher:
                     return
                 self._step(*item, out)
             now = time.monotonic()
-            if batch and _bursting(batch) and now - (held or now) < HOLD_MAX:
+            if batch and _waiting(out) and now - (held or now) < HOLD_MAX:
                 held = held or now
                 continue
             self._deliver(out)
@@ -333,6 +339,8 @@ class Dispatcher:
                 out.append((sub, item))
 
     def _deliver(self, out: list[tuple[Subscription, object]]) -> None:
+        for sub in {sub for sub, _item in out}:
+            sub.delivered()
         for sub, item in out:
             with self._lock:
                 alive = sub in self._subs
@@ -348,7 +356,6 @@ class Dispatcher:
         out.clear()
 
 
-def _bursting(batch: list) -> bool:
-    """Return whether a batch ended in a part of a big changeset (more may be on their way)."""
-    last = batch[-1]
-    return last is not None and last[0].bursting
+def _waiting(out: list[tuple[Subscription, object]]) -> bool:
+    """Return whether a subscription with changes to deliver waits for more of their parts."""
+    return any(sub.waiting for sub in {sub for sub, _item in out})

@@ -72,6 +72,9 @@ class Watching(Handle):
         self._dispatcher.add(sub)
         self._subscriptions.add(sub)
         try:
+            if isinstance(sub, ScopedSubscription):  # ends first: none after a part is missed
+                end = keys.end_key(self.space)
+                sub.attach(self.session.declare_subscriber(end, sub.on_end(self.session)))
             for key in sub_keys:
                 sub.attach(self.session.declare_subscriber(key, self._dispatcher.feed(sub)))
             if scope is None:

@@ -47,6 +47,14 @@ def service_key(space: str, service: str, root: str = ROOT) -> str:
     return f"{root}/{space}/@/{service}"
 
 
+def end_key(space: str, root: str = ROOT) -> str:
+    """Return the key of the end of a changeset's parts: every scoped subscriber hears it.
+
+    One chunk after `@/changes`, so no part selector (two chunks) matches it.
+    """
+    return f"{root}/{space}/@/changes/end"
+
+
 def part_key(space: str, s_chunk: str, p_chunk: str, root: str = ROOT) -> str:
     """Return the key of the part of each changeset about one (subject, predicate).
 

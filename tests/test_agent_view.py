@@ -22,7 +22,7 @@ def test_a_functional_value_replaces_the_old_one_even_before_its_removal_arrives
 
 
 def test_a_robots_agent_keeps_neither_records_nor_other_robots_of_a_snapshot():
-    record, _dropped = FiringLog().record("some_rule", "cause-1", AC.robot1)
+    record, _dropped = FiringLog().record(["some_rule"], "cause-1", AC.robot1)
     mine = [(AC.robot1, RDF.type, AC.Robot), (AC.robot1_battery, AC.charge_percent, Literal(5))]
     site = [
         (AC.hall, AC.crowd_level, Literal("high")),

@@ -7,6 +7,7 @@ import threading
 from agentprocs import HOSPITAL, REPO, value
 from rdflib import RDF, Literal, Namespace
 
+from agents.firings import rule_names
 from conftest import AC_NS, wait_for
 
 AC = Namespace(AC_NS)
@@ -16,7 +17,7 @@ def firings(ts, rule=None):
     """Return {record: (rule names, cause)} of the firing records in the space."""
     found = {}
     for record in ts.query((None, RDF.type, AC.RuleFiring)).subjects():
-        names = {str(o) for o in ts.query((record, AC.rule_name, None)).objects()}
+        names = set(rule_names(ts.query((record, AC.rule_names, None))))
         if rule is None or rule in names:
             found[record] = (names, str(value(ts, record, AC.cause)))
     return found

@@ -126,6 +126,20 @@ def test_a_scoped_subscriber_gets_what_another_replica_decided(replicas: list[Se
         assert [x.seq for x in seen] == [first.seq, second.seq]
 
 
+def test_a_replica_ends_a_changeset_of_many_parts(replicas: list[Server], monkeypatch) -> None:
+    """A replica publishes the end after a changeset's parts: one delivery, without a hold."""
+    import space._subscription
+
+    monkeypatch.setattr(space._subscription, "IDLE", 60.0)
+    monkeypatch.setattr(space._subscription, "HOLD_MAX", 60.0)
+    seen: list = []
+    with _open(replicas[2], "ends") as c:
+        c.subscribe(None, seen.append, scope=[(_s(1), None)])
+        ack = c.write([(_s(1), URIRef(f"{EX}p{i}"), Literal(i)) for i in range(50)])
+        wait_for(lambda: sum(len(x.added) for x in seen) >= 50, 10, "the 50 parts")
+        assert [x.seq for x in seen] == [ack.seq]
+
+
 def test_a_minority_replica_refuses_writes_and_reads(replicas: list[Server], etcd_cluster) -> None:
     triple = (_s(7), URIRef(EX + "at"), Literal("dock"))
     with _open(replicas[0], "cut") as ts:

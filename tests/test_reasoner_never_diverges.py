@@ -10,6 +10,7 @@ from collections import defaultdict
 from agentprocs import REPO, knowledge, value
 from rdflib import RDF, BNode, Literal, Namespace
 
+from agents.firings import rule_names
 from conftest import AC_NS, wait_for
 from space import Change, TripleSpace
 from space.reasoning import Origin, RuleEngine
@@ -36,7 +37,7 @@ def test_a_rule_loop_keeps_the_change_and_is_reported_in_the_space(ts, launch, t
     loops = ts.query((None, RDF.type, AC.RuleLoop))  # OWL RL adds RuleLoop subClassOf itself
     assert len(loops) == 1
     record = next(iter(loops.subjects()))
-    assert set(map(str, ts.query((record, AC.rule_name, None)).objects())) == {"ping", "pong"}
+    assert set(rule_names(ts.query((record, AC.rule_names, None)))) == {"ping", "pong"}
     # It goes on answering.
     ts.write([(EX.y, EX.state, Literal("c"))])
     wait_for(lambda: len(ts.query((EX.y, EX.kind, EX.Stateful))) == 1, 20, "the next answer")

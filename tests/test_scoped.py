@@ -241,6 +241,67 @@ def test_a_changeset_of_many_parts_is_delivered_in_few_changes(ts):
     assert len(seen) <= 15, f"3 changesets delivered in {len(seen)} changes"  # 55-91 without `n`
 
 
+@pytest.mark.parametrize("settings", [20, 200])  # the end names its 44 keys' chunks, or not
+def test_a_changeset_of_many_parts_is_delivered_at_its_end_not_after_a_hold(
+    ts, monkeypatch, settings
+):
+    # The store publishes a changeset's end after its parts: each subscriber of a scope
+    # delivers the parts it has heard as soon as the end came back through it. With
+    # holds far longer than the test's deadline, only the end can make the delivery.
+    import space._subscription
+
+    monkeypatch.setattr(space._subscription, "IDLE", 60.0)
+    monkeypatch.setattr(space._subscription, "HOLD_MAX", 60.0)
+    robot1 = [(AC.robot1_base, AC[f"setting_{i}"], Literal("low")) for i in range(settings)]
+    robot1 += [(AC.robot1, AC[f"status_{i}"], Literal("ok")) for i in range(20)]
+    hall = (AC.hall, AC.crowd_level, Literal("high"))
+    robot2 = [(AC.robot2_base, AC[f"setting_{i}"], Literal("low")) for i in range(20)]
+    seen: list = []
+    others: list = []
+    ts.subscribe(None, seen.append, scope=[*SCOPE, (None, AC.crowd_level)])
+    ts.subscribe(None, others.append, scope=[("ac:robot3_*", None)])  # none of it
+    ts.write(robot2)  # not robot1's: its end is heard, and ignored
+    ack = ts.write([*robot1, hall])
+    expected = len(robot1) + 1
+    wait_for(lambda: sum(len(c.added) for c in seen) >= expected, what="robot1's parts", timeout=10)
+    assert len(seen) == 1 and seen[0].seq == ack.seq
+    assert set(seen[0].added) == {*robot1, hall}
+    assert others == []
+
+
+@pytest.mark.parametrize("reconnected", [True, False])
+def test_a_lost_end_costs_a_hold_not_the_parts(monkeypatch, reconnected):
+    # No end comes (a cut): the parts of a changeset of many are delivered as one change
+    # when the link comes back (`catch_up`), or, as a last resort, when no more came for IDLE.
+    import space._subscription
+    from space._parts import split
+    from space._scoped import ScopedSubscription
+    from space._subscription import Dispatcher
+    from space.template import Template
+
+    if reconnected:
+        monkeypatch.setattr(space._subscription, "IDLE", 60.0)
+        monkeypatch.setattr(space._subscription, "HOLD_MAX", 60.0)
+    triples = [[f"<{AC_NS}robot1_base>", f"<{AC_NS}setting_{i}>", '"low"'] for i in range(20)]
+    wire = {"v": 1, "id": "c1", "agent": "w", "ts": "1/x", "seq": 1, "add": triples}
+    seen: list = []
+    dispatcher = Dispatcher(lambda first, last: ([], 0))
+    sub = ScopedSubscription(
+        dispatcher, Template.of(None), seen.append, space="s", selectors=["*/*"]
+    )
+    sub.start(1)
+    dispatcher.add(sub)
+    dispatcher.mark_ready(sub, 0)
+    for (s, p), part in split(wire).items():
+        part |= {"prev": 0, "n": 20}
+        dispatcher._queue.put((sub, (f"tspace/s/@/changes/{s}/{p}", pack(part))))
+    if reconnected:
+        dispatcher.catch_up()
+    wait_for(lambda: seen, what="the parts, without their end", timeout=10)
+    dispatcher.close()
+    assert len(seen) == 1 and len(seen[0].added) == 20
+
+
 def test_a_robots_hw_monitor_hears_its_robot_and_the_site_not_the_fleet_nor_records(ts):
     from agents.base import robot_scope
     from agents.firings import FiringLog
@@ -248,7 +309,7 @@ def test_a_robots_hw_monitor_hears_its_robot_and_the_site_not_the_fleet_nor_reco
 
     seen = []
     ts.subscribe(None, seen.append, scope=robot_scope(AC.robot1, HwMonitor.shared))
-    record, _dropped = FiringLog().record("some_rule", "cause-1", AC.robot1)
+    record, _dropped = FiringLog().record(["some_rule"], "cause-1", AC.robot1)
     ts.write(record)  # the reasoner's record about robot1: not for its agents
     ts.write([level(2, "low"), (AC.robot2, AC.location, AC.hall)])  # another robot's
     ts.write([(AC.hall, AC.crowd_level, Literal("high"))])  # the site: its lasers see it

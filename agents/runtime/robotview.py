@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from rdflib import RDF, BNode, Graph, Literal, URIRef
 from rdflib.term import Node
 
+from agents.firings import rule_names
 from agents.sentences import firing_sentence
 from agents.vocabulary import AC, FIRING_PROPERTIES, PREFIXES
 from space import ChangeRecord, Triple
@@ -240,7 +241,7 @@ def read_firings(
             continue
         cause = by_id.get(record.cause)
         stamp = record.timestamp.strftime("%H:%M:%S.%f")[:-3] if record.timestamp else ""
-        names = sorted({str(o) for _, p, o in record.added if p == AC.rule_name})
+        names = sorted(set(rule_names(record.added)))
         firings.append(
             Answer(
                 seq=record.seq,

@@ -3,7 +3,11 @@
 A robot's agents select their robot's keys (`@/changes/<...%23robot7_$*>/*`) and
 Zenoh delivers them nothing else. Each part names the seq of the previous
 changeset with a part on its key (`prev`), so a subscriber tells a missed part
-from a key that was quiet. The store keeps the last seq of each key in memory;
+from a key that was quiet. After the parts of a changeset of `BURST` parts or
+more it publishes the changeset's end (`space._parts.end`) on `keys.end_key`, from the
+same session: Zenoh keeps one session's messages of one priority and
+reliability in order, so a subscriber that hears the end has heard every part
+before it (see `space._scoped`). The store keeps the last seq of each key in memory;
 a key it does not know (after a start, a failover, or forgotten to bound
 memory, or while nobody selected parts) gets the `floor`: a seq no lower than
 its real previous part, which makes a subscriber not sure to have it fetch
@@ -17,7 +21,7 @@ import logging
 import zenoh
 
 from space import keys
-from space._parts import split
+from space._parts import BURST, end, split
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload
 from space.store.state import Net, SpaceState
@@ -37,12 +41,13 @@ class PartPublisher:
         self._last: dict[str, dict[str, int]] = {}  # space -> part key -> seq of its last part
         self._floor: dict[str, int] = {}
         self._watchers: dict[str, zenoh.Publisher] = {}
+        self._ends: dict[str, zenoh.Publisher] = {}
 
     def close(self) -> None:
-        """Undeclare the publishers used to learn whether anyone selects parts."""
-        for publisher in self._watchers.values():
+        """Undeclare the publishers of ends and those used to learn whether anyone selects parts."""
+        for publisher in [*self._watchers.values(), *self._ends.values()]:
             publisher.undeclare()
-        self._watchers = {}
+        self._watchers, self._ends = {}, {}
 
     def publish(self, state: SpaceState, net: Net) -> None:
         """Publish the parts of one net changeset, if anyone selects parts of its space.
@@ -83,8 +88,19 @@ class PartPublisher:
                 part["prev"] = prev
                 part["n"] = len(parts)
                 self.session.put(key, pack(part), congestion_control=block)
+        if send and len(parts) >= BURST:
+            self._end(space).put(pack(end(seq, parts)))
         if len(last) > MAX_KEYS:
             self._forget(space, last)
+
+    def _end(self, space: str) -> zenoh.Publisher:
+        """Return the publisher of a space's ends, declared on first use (as its parts: BLOCK)."""
+        publisher = self._ends.get(space)
+        if publisher is None:
+            publisher = self._ends[space] = self.session.declare_publisher(
+                keys.end_key(space, self.root), congestion_control=zenoh.CongestionControl.BLOCK
+            )
+        return publisher
 
     def _forget(self, space: str, last: dict[str, int]) -> None:
         """Forget the oldest half of a space's keys; their next part names the floor."""
