@@ -25,7 +25,6 @@ replicas and Zenoh clients (`_cluster_store.py`): what a robot sees.
 
 from __future__ import annotations
 
-import argparse
 import asyncio
 import os
 import tempfile
@@ -33,7 +32,8 @@ import uuid
 from collections.abc import Sequence
 from pathlib import Path
 
-from _harness import OUT, cpu_seconds, median, percentile, print_table
+from _harness import cpu_seconds, median, percentile
+from _output import bench_parser, parse, png, print_table
 from aetcd import rpc
 
 from space.errors import NoQuorum, WriteConflict
@@ -174,6 +174,7 @@ async def failover_run(cluster: LocalCluster, inflight: int) -> float:
 def plot(
     latencies: list[float],
     failovers: list[float],
+    path: Path,
     name: str = "cluster",
     before: list[float] | None = None,
 ) -> Path:
@@ -182,7 +183,7 @@ def plot(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    OUT.mkdir(parents=True, exist_ok=True)
+    path.parent.mkdir(parents=True, exist_ok=True)
     figure, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
     curves = [("before", before), ("now", latencies)] if before else [("", latencies)]
     for label, curve in curves:
@@ -204,12 +205,11 @@ def plot(
     right.set_xlabel("run")
     right.set_ylabel("leader kill -9 -> next ack (s)")
     right.set_title("Failover")
-    path = OUT / f"{name}.png"
     figure.savefig(path, dpi=120, bbox_inches="tight")
     return path
 
 
-def main(runs: int, seconds: float, inflight: int) -> None:
+def main(runs: int, seconds: float, inflight: int, draw: Path | None) -> None:
     rows, latencies, failovers = [], [], []
     for run in range(runs):
         with tempfile.TemporaryDirectory(prefix="tspace-cluster-") as tmp:
@@ -249,10 +249,13 @@ def main(runs: int, seconds: float, inflight: int) -> None:
         ],
         rows,
     )
-    print(f"plot: {plot(latencies, failovers)}")
+    if draw is not None:
+        print(f"plot: {plot(latencies, failovers, draw)}")
 
 
-def main_store(runs: int, seconds: float, inflight: int, old: Path | None) -> None:
+def main_store(
+    runs: int, seconds: float, inflight: int, old: Path | None, draw: Path | None
+) -> None:
     """Through the store; with `old` (a source tree), its replicas too, in the same run."""
     from _cluster_store import embedded_once, run_once
 
@@ -299,18 +302,20 @@ def main_store(runs: int, seconds: float, inflight: int, old: Path | None) -> No
         [*header, "load"],
         rows,
     )
-    print(f"plot: {plot(latencies, failovers, 'cluster-store', before or None)}")
+    if draw is not None:
+        print(f"plot: {plot(latencies, failovers, draw, 'cluster-store', before or None)}")
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--seconds", type=float, default=5.0)
     parser.add_argument("--inflight", type=int, default=64)
     parser.add_argument("--store", action="store_true", help="through store replicas and Zenoh")
     parser.add_argument("--old", type=Path, help="with --store: replicas of this source tree too")
-    args = parser.parse_args()
+    args = parse(parser, own_plot=True)
     if args.store:
-        main_store(args.runs, args.seconds, args.inflight, args.old)
+        draw = png(args, "cluster-store.png")
+        main_store(args.runs, args.seconds, args.inflight, args.old, draw)
     else:
-        main(args.runs, args.seconds, args.inflight)
+        main(args.runs, args.seconds, args.inflight, png(args, "cluster.png"))

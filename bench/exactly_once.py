@@ -22,6 +22,7 @@ from collections import Counter
 from pathlib import Path
 
 from _harness import code_env, free_port
+from _output import bench_parser, parse
 from rdflib import Literal, Namespace
 
 from space import SpaceError, TripleSpace
@@ -113,13 +114,13 @@ def one_round(edge: Proc, store: Proc, space: str, args: argparse.Namespace) -> 
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--takers", type=int, default=3)
     parser.add_argument("--items", type=int, default=1000)
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--kills", type=int, default=4)
     parser.add_argument("--old", type=Path, help="run the store from this source tree")
-    args = parser.parse_args()
+    args = parse(parser)
     with tempfile.TemporaryDirectory() as tmp:
         edge = Proc(Path(tmp) / "edge", None, "--no-store")
         edge.start()

@@ -35,6 +35,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from _output import bench_parser, parse
 from rdflib import Literal
 from rules_scaling import AC, BATTERY_LOW, BATTERY_NORMAL, as_the_reasoner_runs, prepared_engine
 
@@ -139,14 +140,13 @@ def main(options: argparse.Namespace) -> None:
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=20, help="updates per case and round")
     parser.add_argument("--rounds", type=int, default=2, help="alternations of the codes")
     parser.add_argument("--sizes", type=int, nargs="+", default=[200, 2000])
     parser.add_argument("--old", type=Path, help="a checkout (with .venv) to measure beside")
-    parser.add_argument("--json", action="store_true", help="one JSON object per line per case")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
-    options = parser.parse_args()
+    options = parse(parser, own_json=True)
     if options.child:
         child(options.sizes, options.runs)
     else:

@@ -29,7 +29,6 @@ distinct doubles were acked at 1,000-1,200/s throughout, 2026-11-27).
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import tempfile
 import threading
@@ -39,7 +38,8 @@ import uuid
 from pathlib import Path
 
 import pyoxigraph as ox
-from _harness import OUT, median, percentile, print_table, serve_process
+from _harness import median, percentile, serve_process
+from _output import OUT, bench_parser, parse, print_table
 from rdflib import URIRef
 
 from space import Change, TripleSpace
@@ -229,7 +229,7 @@ def cluster_lateness(runs: int, probes: int) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--writes", type=int, default=500)
     parser.add_argument("--live", type=int, default=100_000)
@@ -246,7 +246,7 @@ def main() -> None:
     parser.add_argument(
         "--cluster", type=int, default=0, help="runs of the expiry lateness on 3 replicas only"
     )
-    args = parser.parse_args()
+    args = parse(parser)
     if args.cluster:
         OUT.mkdir(exist_ok=True)
         (OUT / "lifespans-cluster.txt").write_text(cluster_lateness(args.cluster, 200) + "\n")
