@@ -14,6 +14,7 @@ import json
 import math
 import re
 import sys
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -92,7 +93,11 @@ def as_number(cell: object) -> object:
 
 def json_rows(title: str, header: Sequence[str], rows: Sequence[Sequence[object]]) -> list[str]:
     """Return one JSON object per row: `case` (the first cell), then a key per other column."""
-    keys = [json_key(h) for h in header[1:]]
+    keys: list[str] = []
+    seen: Counter[str] = Counter()
+    for key in map(json_key, header[1:]):  # a key twice would lose a column: number the later
+        seen[key] += 1
+        keys.append(key if seen[key] == 1 else f"{key}_{seen[key]}")
     lines = []
     for row in rows:
         line: dict[str, object] = {"case": str(row[0])}

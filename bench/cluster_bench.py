@@ -239,11 +239,11 @@ def main(runs: int, seconds: float, inflight: int, draw: Path | None) -> None:
         [
             "run",
             "1 txn each: cs/s",
-            "p99 ms",
+            "1 txn each: p99 ms",
             "grouped: cs/s",
-            "p50 ms",
-            "p99 ms",
-            "per txn",
+            "grouped: p50 ms",
+            "grouped: p99 ms",
+            "grouped: cs per txn",
             "etcd cpu ms/cs",
             "failover s",
         ],
@@ -286,20 +286,20 @@ def main_store(
         rows.append([*row, os.getloadavg()[0]])
         print(rows[-1], flush=True)
     rows.append(["median", *(median([r[i] for r in rows]) for i in range(1, len(rows[0])))])
-    header = ["run", "embedded cs/s", "p99 ms"]
+    header = ["run", "embedded cs/s", "embedded p99 ms"]
+    for name in ["before"] * (old is not None) + ["cluster"]:
+        header += [f"{name} cs/s", f"{name} p50 ms", f"{name} p99 ms"]
+        header += [f"{name} cpu ms/cs: replicas", "etcd ms/cs", "client ms/cs"]
+    header += ["refused (cs)", "failover s"]
     if old is not None:
-        header += ["before cs/s", "p50 ms", "p99 ms", "cpu ms/cs: replicas", "etcd", "client"]
-    header += ["cluster cs/s", "p50 ms", "p99 ms", "cpu ms/cs: replicas", "etcd", "client"]
-    header += ["refused", "failover s"]
-    if old is not None:
-        header.append("x before")
+        header.append("cs/s x before")
     print_table(
         f"through the store, {inflight} in flight, {seconds:g} s per run: one embedded store, "
         + ("then 3 etcd members and 3 replicas of the code before, " if old else "then ")
         + "3 etcd members and 3 replicas on this host "
         "(targets: >= 5000/s, p99 <= 20 ms, failover <= 3 s); cpu: CPU time of the 3 replicas, "
         "of the 3 etcd members, of this client, per acknowledged changeset",
-        [*header, "load"],
+        [*header, "load (1 min)"],
         rows,
     )
     if draw is not None:

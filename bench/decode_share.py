@@ -95,7 +95,14 @@ def main() -> None:
             )
     print_table(
         f"one robot's agent in a {args.robots}-robot fleet ({args.writes} changesets per robot)",
-        ["subscribed to", "written", "decoded", "their changesets", "about robot7", "writes (s)"],
+        [
+            "subscribed to",
+            "written (cs)",
+            "decoded (cs)",
+            "their changesets (cs)",
+            "about robot7 (cs)",
+            "writes (s)",
+        ],
         rows,
     )
 

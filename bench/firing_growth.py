@@ -35,7 +35,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _output import bench_parser, parse
+from _output import bench_parser, parse, print_table
 from rdflib import Literal
 from rules_scaling import AC, BATTERY_LOW, BATTERY_NORMAL, as_the_reasoner_runs, prepared_engine
 
@@ -132,11 +132,14 @@ def main(options: argparse.Namespace) -> None:
                 )
             )
         return
-    print("CPU us per firing (median of the rounds' medians); collections per update")
-    print(f"{'code':>5} {'rules':>6} {'firing':>6} " + " ".join(f"{k[:18]:>18}" for k in keys))
-    for (code, rules, firing), rows in found.items():
-        values = [statistics.median(r[k] for r in rows) for k in keys]
-        print(f"{code:>5} {rules:>6} {firing:>6} " + " ".join(f"{v:18.2f}" for v in values))
+    print_table(
+        "CPU us per firing (median of the rounds' medians); collections per update",
+        ["code", "rules", "firing", *(k.replace("_per_", " per ").replace("_", " ") for k in keys)],
+        [
+            [code, rules, firing, *(statistics.median(r[k] for r in rows) for k in keys)]
+            for (code, rules, firing), rows in found.items()
+        ],
+    )
 
 
 if __name__ == "__main__":

@@ -274,7 +274,7 @@ def main() -> None:
         table.append((name, f"{median(wall):,.0f}", f"{median(cpu):,.0f}", _range(cpu)))
     print_table(
         f"Oxigraph alone (pyoxigraph {ox.__version__}), medians of {args.runs} runs",
-        ["way of writing", "triples/s", "triples/CPU-s", "per CPU-s min..max"],
+        ["way of writing", "triples/s", "triples/CPU-s", "triples/CPU-s min..max"],
         table,
     )
     path = png(args, "floors.png")
@@ -292,7 +292,9 @@ def main() -> None:
     )
     table = [(m, median(v), f"{min(v):.3f}..{max(v):.3f}") for m, v in zenoh_rows.items()]
     print_table(
-        f"Zenoh alone, medians of {args.runs} runs", ["measure", "median", "min..max"], table
+        f"Zenoh alone, medians of {args.runs} runs",
+        ["measure", "median (ms)", "min..max (ms)"],
+        table,
     )
 
 

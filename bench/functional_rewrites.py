@@ -45,10 +45,11 @@ def main() -> None:
             print(rows[-1], flush=True)
     header = ["phase"]
     for name in codes:
-        header += [f"{name}: readings per robot", "cs/s", "p99 ms", "cpu ms/cs"]
+        header += [f"{name}: readings per robot", f"{name}: cs/s", f"{name}: p99 ms"]
+        header.append(f"{name}: cpu ms/cs")
     print_table(
         f"64 robots rewriting their battery level through one store, {args.seconds:g} s phases",
-        [*header, "load"],
+        [*header, "load (1 min)"],
         rows,
     )
 

@@ -93,7 +93,7 @@ def main() -> None:
     print_table(
         f"write -> notification through a router passing {args.freq:g} changesets/s "
         f"({args.count} written every 2 ms, {args.runs} runs)",
-        ["tree", "live ms", "p50 ms", "p99 ms", "max ms", "delivered (fewest)"],
+        ["tree", "live ms", "p50 ms", "p99 ms", "max ms", "delivered (fewest, cs)"],
         rows,
     )
 

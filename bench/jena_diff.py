@@ -31,7 +31,7 @@ from rdflib.term import Node
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _output import bench_parser, parse
+from _output import bench_parser, parse, print_table
 from jena_referee import ROOT, classpath
 
 from space.reasoning import RuleEngine, default_registry, parse_rules
@@ -231,9 +231,11 @@ def main(seed: int, sets: int, steps: int) -> None:
                 tally[label] += 1
                 examples.setdefault(label, f"set {n} state {i}:\n{rules}")
     total = sum(tally.values())
-    print(f"{sets} rule sets, {total} states compared (seed {seed}):")
-    for label, count in tally.most_common():
-        print(f"  {label:18} {count}")
+    print_table(
+        f"{sets} rule sets, {total} states compared (seed {seed})",
+        ["class", "states (count)"],
+        tally.most_common(),
+    )
     for label, example in examples.items():
         if label not in ("agree",):
             print(f"\nexample of {label}: {example}")

@@ -168,7 +168,7 @@ def main() -> None:
     header = ["changesets a commit"]
     for name in trees:
         header += [f"{name}: install us/cs", f"{name}: commit us/cs"]
-    header += ["Oxigraph alone: value replaced", "value and stamp replaced"]
+    header += ["Oxigraph alone: value replaced us/cs", "value and stamp replaced us/cs"]
     print_table(
         f"a replica's apply of functional rewrites, CPU us per changeset, medians of {args.runs}",
         header,

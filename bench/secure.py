@@ -61,7 +61,14 @@ def main(rounds: int, runs: int) -> None:
     print_table(
         f'"battery very low" -> last agent acted (ms; {rounds} rounds x {runs} runs, '
         "plain and secure alternating)",
-        ["mode", "runs", "p50 per round", "median of rounds", "p50 all", "p99 all"],
+        [
+            "mode",
+            "runs",
+            "p50 per round (ms)",
+            "median of rounds (ms)",
+            "p50 all (ms)",
+            "p99 all (ms)",
+        ],
         rows,
     )
 
