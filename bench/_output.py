@@ -138,12 +138,15 @@ def plot_tables(
     columns = min(3, len(panels))
     lines = math.ceil(len(panels) / columns)
     tall = max(len(cases) for _, _, cases, _ in panels) * 0.3 + 1.2
-    figure, axes = plt.subplots(lines, columns, figsize=(5 * columns, tall * lines), squeeze=False)
+    figure, axes = plt.subplots(
+        lines, columns, figsize=(6 * columns, tall * lines), squeeze=False, layout="constrained"
+    )
     for axis, (n, name, cases, values) in zip(axes.flat, panels, strict=False):
         axis.barh(range(len(values)), values)
         axis.set_yticks(range(len(cases)), cases, fontsize="small")
         axis.invert_yaxis()
         axis.set_title(f"table {n + 1}: {name}" if len(tables) > 1 else name, fontsize="medium")
+        axis.locator_params(axis="x", nbins=4)
         axis.grid(True, axis="x", alpha=0.3)
     for axis in axes.flat[len(panels) :]:
         axis.set_visible(False)
