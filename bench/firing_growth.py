@@ -121,17 +121,6 @@ def main(options: argparse.Namespace) -> None:
                 found.setdefault((code, row["rules"], row["firing"]), []).append(row)
     keys = ["us_per_firing", "no_gc_us_per_firing", "gc_us_per_firing", "calls_per_firing"]
     keys += ["gen0_per_update", "gen1_per_update", "gen2_per_update"]
-    if options.json:
-        for (code, rules, firing), rows in found.items():
-            medians = {k: round(statistics.median(r[k] for r in rows), 3) for k in keys}
-            print(
-                json.dumps(
-                    {"case": "update", "code": code, "rules": rules, "firing": firing}
-                    | medians
-                    | {"clock": "CPU"}
-                )
-            )
-        return
     print_table(
         "CPU us per firing (median of the rounds' medians); collections per update",
         ["code", "rules", "firing", *(k.replace("_per_", " per ").replace("_", " ") for k in keys)],
@@ -149,7 +138,7 @@ if __name__ == "__main__":
     parser.add_argument("--sizes", type=int, nargs="+", default=[200, 2000])
     parser.add_argument("--old", type=Path, help="a checkout (with .venv) to measure beside")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
-    options = parse(parser, own_json=True)
+    options = parse(parser)
     if options.child:
         child(options.sizes, options.runs)
     else:
