@@ -77,7 +77,9 @@ def json_key(header: str) -> str:
 
 
 def as_number(cell: object) -> object:
-    """Return a cell as a number if it reads as one ("1,234" -> 1234; NaN -> None), else as is."""
+    """Return a cell as a number if it reads as one ("1,234" -> 1234; NaN, "": None), else as is."""
+    if cell is None or cell == "":
+        return None
     if isinstance(cell, str):
         try:
             number = float(cell.replace(",", ""))

@@ -30,6 +30,7 @@ def test_cells_that_read_as_numbers_are_numbers_and_others_stay_text() -> None:
     assert as_number("0.25") == 0.25
     assert as_number(2.123456789) == 2.123
     assert as_number(float("nan")) is None
+    assert as_number(None) is None
     assert as_number("0.5..0.9") == "0.5..0.9"
     assert as_number(True) == "True"
 
