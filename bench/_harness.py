@@ -111,17 +111,3 @@ def percentile(values: Sequence[float], q: float) -> float:
 def median(values: Sequence[float]) -> float:
     """Return the median."""
     return statistics.median(values)
-
-
-def print_table(title: str, header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
-    """Print and return an aligned table."""
-    cells = [[f"{c:.3f}" if isinstance(c, float) else str(c) for c in r] for r in rows]
-    widths = [max(len(h), *(len(r[i]) for r in cells)) for i, h in enumerate(header)]
-    lines = [title, "  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True))]
-    lines += ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in cells]
-    text = "\n".join(lines)
-    print(text, flush=True)
-    return text
-
-
-OUT = Path(__file__).parent / "out"

@@ -11,12 +11,12 @@ growth.
 
 from __future__ import annotations
 
-import argparse
 import time
 from pathlib import Path
 
 import zenoh
-from _harness import free_port, print_table
+from _harness import free_port
+from _output import bench_parser, parse, print_table
 from zenoh import ext
 
 from space.zconfig import make_config
@@ -61,9 +61,9 @@ def measure(session: zenoh.Session, n: int, advanced: bool) -> list[object]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = bench_parser(__doc__)
     parser.add_argument("--keys", type=int, default=2000)
-    args = parser.parse_args()
+    args = parse(parser)
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     with (
         zenoh.open(make_config(mode="router", listen=[endpoint])),

@@ -25,7 +25,6 @@ replicas and Zenoh clients (`_cluster_store.py`): what a robot sees.
 
 from __future__ import annotations
 
-import argparse
 import asyncio
 import os
 import tempfile
@@ -33,7 +32,8 @@ import uuid
 from collections.abc import Sequence
 from pathlib import Path
 
-from _harness import OUT, cpu_seconds, median, percentile, print_table
+from _harness import cpu_seconds, median, percentile
+from _output import bench_parser, parse, png, print_table
 from aetcd import rpc
 
 from space.errors import NoQuorum, WriteConflict
@@ -174,6 +174,7 @@ async def failover_run(cluster: LocalCluster, inflight: int) -> float:
 def plot(
     latencies: list[float],
     failovers: list[float],
+    path: Path,
     name: str = "cluster",
     before: list[float] | None = None,
 ) -> Path:
@@ -182,7 +183,7 @@ def plot(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    OUT.mkdir(parents=True, exist_ok=True)
+    path.parent.mkdir(parents=True, exist_ok=True)
     figure, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
     curves = [("before", before), ("now", latencies)] if before else [("", latencies)]
     for label, curve in curves:
@@ -204,12 +205,11 @@ def plot(
     right.set_xlabel("run")
     right.set_ylabel("leader kill -9 -> next ack (s)")
     right.set_title("Failover")
-    path = OUT / f"{name}.png"
     figure.savefig(path, dpi=120, bbox_inches="tight")
     return path
 
 
-def main(runs: int, seconds: float, inflight: int) -> None:
+def main(runs: int, seconds: float, inflight: int, draw: Path | None) -> None:
     rows, latencies, failovers = [], [], []
     for run in range(runs):
         with tempfile.TemporaryDirectory(prefix="tspace-cluster-") as tmp:
@@ -239,20 +239,23 @@ def main(runs: int, seconds: float, inflight: int) -> None:
         [
             "run",
             "1 txn each: cs/s",
-            "p99 ms",
+            "1 txn each: p99 ms",
             "grouped: cs/s",
-            "p50 ms",
-            "p99 ms",
-            "per txn",
+            "grouped: p50 ms",
+            "grouped: p99 ms",
+            "grouped: cs per txn",
             "etcd cpu ms/cs",
             "failover s",
         ],
         rows,
     )
-    print(f"plot: {plot(latencies, failovers)}")
+    if draw is not None:
+        print(f"plot: {plot(latencies, failovers, draw)}")
 
 
-def main_store(runs: int, seconds: float, inflight: int, old: Path | None) -> None:
+def main_store(
+    runs: int, seconds: float, inflight: int, old: Path | None, draw: Path | None
+) -> None:
     """Through the store; with `old` (a source tree), its replicas too, in the same run."""
     from _cluster_store import embedded_once, run_once
 
@@ -283,34 +286,36 @@ def main_store(runs: int, seconds: float, inflight: int, old: Path | None) -> No
         rows.append([*row, os.getloadavg()[0]])
         print(rows[-1], flush=True)
     rows.append(["median", *(median([r[i] for r in rows]) for i in range(1, len(rows[0])))])
-    header = ["run", "embedded cs/s", "p99 ms"]
+    header = ["run", "embedded cs/s", "embedded p99 ms"]
+    for name in ["before"] * (old is not None) + ["cluster"]:
+        header += [f"{name} cs/s", f"{name} p50 ms", f"{name} p99 ms"]
+        header += [f"{name} cpu ms/cs: replicas", "etcd ms/cs", "client ms/cs"]
+    header += ["refused (cs)", "failover s"]
     if old is not None:
-        header += ["before cs/s", "p50 ms", "p99 ms", "cpu ms/cs: replicas", "etcd", "client"]
-    header += ["cluster cs/s", "p50 ms", "p99 ms", "cpu ms/cs: replicas", "etcd", "client"]
-    header += ["refused", "failover s"]
-    if old is not None:
-        header.append("x before")
+        header.append("cs/s x before")
     print_table(
         f"through the store, {inflight} in flight, {seconds:g} s per run: one embedded store, "
         + ("then 3 etcd members and 3 replicas of the code before, " if old else "then ")
         + "3 etcd members and 3 replicas on this host "
         "(targets: >= 5000/s, p99 <= 20 ms, failover <= 3 s); cpu: CPU time of the 3 replicas, "
         "of the 3 etcd members, of this client, per acknowledged changeset",
-        [*header, "load"],
+        [*header, "load (1 min)"],
         rows,
     )
-    print(f"plot: {plot(latencies, failovers, 'cluster-store', before or None)}")
+    if draw is not None:
+        print(f"plot: {plot(latencies, failovers, draw, 'cluster-store', before or None)}")
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--seconds", type=float, default=5.0)
     parser.add_argument("--inflight", type=int, default=64)
     parser.add_argument("--store", action="store_true", help="through store replicas and Zenoh")
     parser.add_argument("--old", type=Path, help="with --store: replicas of this source tree too")
-    args = parser.parse_args()
+    args = parse(parser, own_plot=True)
     if args.store:
-        main_store(args.runs, args.seconds, args.inflight, args.old)
+        draw = png(args, "cluster-store.png")
+        main_store(args.runs, args.seconds, args.inflight, args.old, draw)
     else:
-        main(args.runs, args.seconds, args.inflight)
+        main(args.runs, args.seconds, args.inflight, png(args, "cluster.png"))

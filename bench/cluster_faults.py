@@ -18,7 +18,6 @@ every replica's log and state.
 
 from __future__ import annotations
 
-import argparse
 import random
 import sys
 import tempfile
@@ -27,7 +26,7 @@ from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
 
-from _harness import print_table
+from _output import bench_parser, parse, print_table
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import logfleet
@@ -120,11 +119,11 @@ def main(flap: float, cut: float, store: bool) -> None:
         + " under faults, 3 hosts (netns), writers and takers on every host",
         [
             "scenario",
-            "s",
-            "acked",
-            "taken",
-            "refused",
-            "violations",
+            "duration s",
+            "acked (changesets)",
+            "taken (items)",
+            "refused (changesets by reason)",
+            "violations (count)",
             "identical after s",
             "first violations",
             "other refusals",
@@ -134,9 +133,9 @@ def main(flap: float, cut: float, store: bool) -> None:
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--flap-seconds", type=float, default=60.0)
     parser.add_argument("--cut-seconds", type=float, default=10.0)
     parser.add_argument("--store", action="store_true", help="tspace serve --cluster replicas")
-    args = parser.parse_args()
+    args = parse(parser)
     main(args.flap_seconds, args.cut_seconds, args.store)

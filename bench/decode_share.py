@@ -13,14 +13,14 @@ the same traffic. Medians over `--runs`.
 
 from __future__ import annotations
 
-import argparse
 import subprocess
 import sys
 import threading
 import time
 from pathlib import Path
 
-from _harness import code_env, median, print_table, serve
+from _harness import code_env, median, serve
+from _output import bench_parser, parse, print_table
 from rdflib import Literal
 
 from agents.base import robot_scope
@@ -66,12 +66,12 @@ def one_run(
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--robots", type=int, default=50)
     parser.add_argument("--writes", type=int, default=4, help="changesets per robot")
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--before", type=Path, help="a worktree of the code before, run first")
-    args = parser.parse_args()
+    args = parse(parser)
     common = ["--robots", str(args.robots), "--writes", str(args.writes), "--runs", str(args.runs)]
     if args.before is not None:
         print(f"before ({args.before}):", flush=True)
@@ -95,7 +95,14 @@ def main() -> None:
             )
     print_table(
         f"one robot's agent in a {args.robots}-robot fleet ({args.writes} changesets per robot)",
-        ["subscribed to", "written", "decoded", "their changesets", "about robot7", "writes (s)"],
+        [
+            "subscribed to",
+            "written (cs)",
+            "decoded (cs)",
+            "their changesets (cs)",
+            "about robot7 (cs)",
+            "writes (s)",
+        ],
         rows,
     )
 

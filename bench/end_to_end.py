@@ -39,7 +39,6 @@ staying this tree's; `--json` prints one JSON object per line per case
 
 from __future__ import annotations
 
-import argparse
 import json
 import queue
 import subprocess
@@ -53,7 +52,8 @@ from pathlib import Path
 
 import msgpack
 import zenoh
-from _harness import OUT, code_env, median, percentile, print_table, serve_process
+from _harness import code_env, median, percentile, serve_process
+from _output import bench_parser, parse, png, print_table
 from rdflib import Graph, Literal, Namespace, URIRef
 from rules_scaling import PAPER, paper_rules
 
@@ -458,14 +458,14 @@ def as_json(tree: str, rule_set: RuleSet, results: list[dict[str, float]]) -> st
     return json.dumps(line)
 
 
-def plot(all_results: Results) -> Path:
+def plot(all_results: Results, path: Path) -> Path:
     """Draw the distribution of the last agent's latency per case, with the paper's."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    OUT.mkdir(parents=True, exist_ok=True)
+    path.parent.mkdir(parents=True, exist_ok=True)
     figure, axis = plt.subplots(figsize=(7, 4.5))
     for (tree, rule_set), results in all_results.items():
         values = sorted(r["last"] for r in results)
@@ -486,13 +486,12 @@ def plot(all_results: Results) -> Path:
     axis.set_title("End to end, separate processes on loopback")
     axis.grid(True, which="both", alpha=0.3)
     axis.legend(loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=2, fontsize="small")
-    path = OUT / "end_to_end.png"
     figure.savefig(path, dpi=120, bbox_inches="tight")
     return path
 
 
 def main(
-    runs: int, extra: int, draw: bool, old: Path | None, as_lines: bool, only: list[str]
+    runs: int, extra: int, draw: Path | None, old: Path | None, as_lines: bool, only: list[str]
 ) -> None:
     cases = {
         "project": RuleSet(target="p50 <= 3, p99 <= 10"),
@@ -535,12 +534,12 @@ def main(
     if as_lines:
         for (tree, rule_set), results in all_results.items():
             print(as_json(tree, rule_set, results), flush=True)
-    if draw:
-        print(f"plot: {plot(all_results)}")
+    if draw is not None:
+        print(f"plot: {plot(all_results, draw)}")
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=100, help="very low batteries per rule set")
     parser.add_argument(
         "--extra-rules",
@@ -552,19 +551,17 @@ if __name__ == "__main__":
     parser.add_argument(
         "--old", type=Path, metavar="TREE", help="also run the store and agents from TREE"
     )
-    parser.add_argument("--json", action="store_true", help="one JSON line per case too")
-    parser.add_argument("--no-plot", action="store_true", help="skip the PNG")
     parser.add_argument(
         "--case",
         action="append",
         choices=["project", "loaded", "firing"],
         help="run only these rule sets (repeatable; default all three)",
     )
-    options = parser.parse_args()
+    options = parse(parser, own_json=True, own_plot=True)
     main(
         options.runs,
         options.extra_rules,
-        not options.no_plot,
+        png(options, "end_to_end.png"),
         options.old,
         options.json,
         options.case or [],

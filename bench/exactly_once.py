@@ -22,6 +22,7 @@ from collections import Counter
 from pathlib import Path
 
 from _harness import code_env, free_port
+from _output import bench_parser, parse, print_table
 from rdflib import Literal, Namespace
 
 from space import SpaceError, TripleSpace
@@ -113,13 +114,13 @@ def one_round(edge: Proc, store: Proc, space: str, args: argparse.Namespace) -> 
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--takers", type=int, default=3)
     parser.add_argument("--items", type=int, default=1000)
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--kills", type=int, default=4)
     parser.add_argument("--old", type=Path, help="run the store from this source tree")
-    args = parser.parse_args()
+    args = parse(parser)
     with tempfile.TemporaryDirectory() as tmp:
         edge = Proc(Path(tmp) / "edge", None, "--no-store")
         edge.start()
@@ -128,16 +129,17 @@ def main() -> None:
         try:
             wait_for_store(edge.endpoint)
             started = time.monotonic()
-            totals = [0, 0]
+            rows: list[list[object]] = []
             for r in range(args.rounds):
                 lost, twice = one_round(edge, store, f"once{r}", args)
-                totals[0] += lost
-                totals[1] += twice
+                rows.append([f"round {r + 1}", lost, twice])
                 print(f"round {r + 1}: {lost} lost, {twice} taken twice", flush=True)
-            print(
+            rows.append(["total", sum(r[1] for r in rows), sum(r[2] for r in rows)])  # type: ignore[misc]
+            print_table(
                 f"{args.takers} takers x {args.items} items x {args.rounds} rounds, "
-                f"{args.kills} kills a round: {totals[0]} lost, {totals[1]} taken twice "
-                f"({time.monotonic() - started:.0f} s)"
+                f"{args.kills} kills a round ({time.monotonic() - started:.0f} s)",
+                ["round", "lost (items)", "taken twice (items)"],
+                rows,
             )
         except BaseException:
             print(store.log.read_text(errors="replace")[-3000:], file=sys.stderr)

@@ -35,6 +35,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from _output import bench_parser, parse, print_table
 from rdflib import Literal
 from rules_scaling import AC, BATTERY_LOW, BATTERY_NORMAL, as_the_reasoner_runs, prepared_engine
 
@@ -120,33 +121,24 @@ def main(options: argparse.Namespace) -> None:
                 found.setdefault((code, row["rules"], row["firing"]), []).append(row)
     keys = ["us_per_firing", "no_gc_us_per_firing", "gc_us_per_firing", "calls_per_firing"]
     keys += ["gen0_per_update", "gen1_per_update", "gen2_per_update"]
-    if options.json:
-        for (code, rules, firing), rows in found.items():
-            medians = {k: round(statistics.median(r[k] for r in rows), 3) for k in keys}
-            print(
-                json.dumps(
-                    {"case": "update", "code": code, "rules": rules, "firing": firing}
-                    | medians
-                    | {"clock": "CPU"}
-                )
-            )
-        return
-    print("CPU us per firing (median of the rounds' medians); collections per update")
-    print(f"{'code':>5} {'rules':>6} {'firing':>6} " + " ".join(f"{k[:18]:>18}" for k in keys))
-    for (code, rules, firing), rows in found.items():
-        values = [statistics.median(r[k] for r in rows) for k in keys]
-        print(f"{code:>5} {rules:>6} {firing:>6} " + " ".join(f"{v:18.2f}" for v in values))
+    print_table(
+        "CPU us per firing (median of the rounds' medians); collections per update",
+        ["code", "rules", "firing", *(k.replace("_per_", " per ").replace("_", " ") for k in keys)],
+        [
+            [code, rules, firing, *(statistics.median(r[k] for r in rows) for k in keys)]
+            for (code, rules, firing), rows in found.items()
+        ],
+    )
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=20, help="updates per case and round")
     parser.add_argument("--rounds", type=int, default=2, help="alternations of the codes")
     parser.add_argument("--sizes", type=int, nargs="+", default=[200, 2000])
     parser.add_argument("--old", type=Path, help="a checkout (with .venv) to measure beside")
-    parser.add_argument("--json", action="store_true", help="one JSON object per line per case")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
-    options = parser.parse_args()
+    options = parse(parser)
     if options.child:
         child(options.sizes, options.runs)
     else:

@@ -42,7 +42,8 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from _fleet import REPO, RULES, Fleet, Observer, describe, reasoner_argv, rss_mb, stop_process
-from _harness import OUT, code_env, median, percentile, print_table, serve_process
+from _harness import code_env, median, percentile, serve_process
+from _output import bench_parser, parse, png, print_table
 
 from space import TripleSpace
 
@@ -199,14 +200,14 @@ def recovery(robots: int, hz: float, cut: float, sysctls: dict[str, str]) -> dic
     }
 
 
-def plot(sizes: dict[int, list[list[float]]], load: dict, cuts: list[list]) -> Path:
+def plot(sizes: dict[int, list[list[float]]], load: dict, cuts: list[list], path: Path) -> Path:
     """Draw latency against fleet size, the sustained run, and the recoveries."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    OUT.mkdir(parents=True, exist_ok=True)
+    path.parent.mkdir(parents=True, exist_ok=True)
     figure, (left, middle, right) = plt.subplots(1, 3, figsize=(17, 4.8), layout="constrained")
     counts = sorted(sizes)
     for q, style in ((50, "o-"), (99, "s--")):
@@ -237,7 +238,6 @@ def plot(sizes: dict[int, list[list[float]]], load: dict, cuts: list[list]) -> P
         right.legend()
     right.set(ylabel="seconds after the link is back (median)")
     right.set_title("Recovery after a 5 s link cut")
-    path = OUT / "fleet.png"
     figure.savefig(path, dpi=120, bbox_inches="tight")
     return path
 
@@ -321,11 +321,11 @@ def main(args: argparse.Namespace) -> None:
         [
             "code",
             "changesets/s",
-            "sent",
-            "lost",
+            "sent (changesets)",
+            "lost (changesets)",
             "drained after (s)",
-            "seq gaps",
-            "unanswered",
+            "seq gaps (count)",
+            "unanswered (changes)",
             "answer p50 (ms)",
             "answer p99 (ms)",
             "applied p99 (ms)",
@@ -364,7 +364,7 @@ def main(args: argparse.Namespace) -> None:
                 "reasoner caught up (s)",
                 "every host agrees (s)",
                 "worst (s)",
-                "missed on c",
+                "missed on c (changesets)",
             ],
             cuts,
         )
@@ -375,12 +375,13 @@ def main(args: argparse.Namespace) -> None:
             print(
                 json.dumps({k: round(v, 3) if isinstance(v, float) else v for k, v in line.items()})
             )
-    if args.plot and counts:
-        print(f"plot: {plot({n: sizes[(trees[-1][0], n)] for n in counts}, load, cuts)}")
+    path = png(args, "fleet.png")
+    if path is not None and counts:
+        print(f"plot: {plot({n: sizes[(trees[-1][0], n)] for n in counts}, load, cuts, path)}")
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=3, help="runs per measurement (default 3)")
     parser.add_argument("--samples", type=int, default=100, help="battery changes per run")
     parser.add_argument(
@@ -404,7 +405,5 @@ if __name__ == "__main__":
     parser.add_argument(
         "--old", type=Path, metavar="TREE", help="also run the store and reasoner from TREE"
     )
-    parser.add_argument("--json", action="store_true", help="one JSON line per case too")
     parser.add_argument("--no-recovery", dest="recovery", action="store_false")
-    parser.add_argument("--no-plot", dest="plot", action="store_false")
-    main(parser.parse_args())
+    main(parse(parser, own_json=True, own_plot=True))

@@ -30,7 +30,6 @@ Run: python bench/floors.py [--runs 3] [--million]
 
 from __future__ import annotations
 
-import argparse
 import json
 import queue
 import subprocess
@@ -42,7 +41,8 @@ from pathlib import Path
 
 import pyoxigraph as ox
 import zenoh
-from _harness import free_port, median, percentile, print_table
+from _harness import free_port, median, percentile
+from _output import bench_parser, parse, png, print_table
 
 GRAPH = "urn:tspace:graph:floor:asserted"
 NQ = ox.RdfFormat.N_QUADS
@@ -243,15 +243,14 @@ def zenoh_hop(count: int) -> tuple[float, float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--count", type=int, default=1000, help="GETs per Zenoh run")
     parser.add_argument("--million", action="store_true", help="also 1M into a fresh store")
-    parser.add_argument("--plot", type=Path, help="write a PNG of triples per CPU-second here")
     parser.add_argument(
         "--changesets", type=int, default=20, help="rounds of the changeset-with-removals ways"
     )
-    args = parser.parse_args()
+    args = parse(parser, own_plot=True)
     rows: dict[str, list[tuple[float, float]]] = {}
     zenoh_rows: dict[str, list[float]] = {}
     changeset_rows: dict[str, list[tuple[float, float]]] = {}
@@ -275,11 +274,12 @@ def main() -> None:
         table.append((name, f"{median(wall):,.0f}", f"{median(cpu):,.0f}", _range(cpu)))
     print_table(
         f"Oxigraph alone (pyoxigraph {ox.__version__}), medians of {args.runs} runs",
-        ["way of writing", "triples/s", "triples/CPU-s", "per CPU-s min..max"],
+        ["way of writing", "triples/s", "triples/CPU-s", "triples/CPU-s min..max"],
         table,
     )
-    if args.plot is not None:
-        plot({name: median([v[1] for v in values]) for name, values in rows.items()}, args.plot)
+    path = png(args, "floors.png")
+    if path is not None:
+        plot({name: median([v[1] for v in values]) for name, values in rows.items()}, path)
     table = [
         (name, median([w for w, _ in v]), median([c for _, c in v]), _range([c for _, c in v], 2))
         for name, v in changeset_rows.items()
@@ -292,7 +292,9 @@ def main() -> None:
     )
     table = [(m, median(v), f"{min(v):.3f}..{max(v):.3f}") for m, v in zenoh_rows.items()]
     print_table(
-        f"Zenoh alone, medians of {args.runs} runs", ["measure", "median", "min..max"], table
+        f"Zenoh alone, medians of {args.runs} runs",
+        ["measure", "median (ms)", "min..max (ms)"],
+        table,
     )
 
 

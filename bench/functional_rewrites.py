@@ -15,22 +15,22 @@ stores' phases taken in turns.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import os
 from pathlib import Path
 
 from _cluster_store import throughput
-from _harness import print_table, serve_process
+from _harness import serve_process
+from _output import bench_parser, parse, print_table
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--phases", type=int, default=6)
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--inflight", type=int, default=64)
     parser.add_argument("--old", type=Path, help="a source tree of the code before")
-    args = parser.parse_args()
+    args = parse(parser)
     codes = {"now": None} if args.old is None else {"now": None, "before": args.old}
     rows, written = [], dict.fromkeys(codes, 0.0)
     with contextlib.ExitStack() as stack:
@@ -45,10 +45,11 @@ def main() -> None:
             print(rows[-1], flush=True)
     header = ["phase"]
     for name in codes:
-        header += [f"{name}: readings per robot", "cs/s", "p99 ms", "cpu ms/cs"]
+        header += [f"{name}: readings per robot", f"{name}: cs/s", f"{name}: p99 ms"]
+        header.append(f"{name}: cpu ms/cs")
     print_table(
         f"64 robots rewriting their battery level through one store, {args.seconds:g} s phases",
-        [*header, "load"],
+        [*header, "load (1 min)"],
         rows,
     )
 

@@ -16,7 +16,6 @@ filled: the repair's cost); and how many changes arrived of how many written. Wi
 
 from __future__ import annotations
 
-import argparse
 import itertools
 import json
 import statistics
@@ -25,7 +24,8 @@ import sys
 from pathlib import Path
 
 import zenoh
-from _harness import code_env, free_port, percentile, print_table, serve_process
+from _harness import code_env, free_port, percentile, serve_process
+from _output import bench_parser, parse, print_table
 
 from space import keys
 from space.zconfig import make_config
@@ -69,12 +69,12 @@ def run(code: Path | None, count: int, freq: float, space: str) -> list[float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--count", type=int, default=200, help="changesets written per run")
     parser.add_argument("--freq", type=float, default=20.0, help="changesets/s the router passes")
     parser.add_argument("--old", type=Path, help="a source tree of the code before")
-    args = parser.parse_args()
+    args = parse(parser)
     trees: list[tuple[str, Path | None]] = [("new", None)]
     if args.old is not None:
         trees.insert(0, ("old", args.old.resolve()))
@@ -93,7 +93,7 @@ def main() -> None:
     print_table(
         f"write -> notification through a router passing {args.freq:g} changesets/s "
         f"({args.count} written every 2 ms, {args.runs} runs)",
-        ["tree", "live ms", "p50 ms", "p99 ms", "max ms", "delivered (fewest)"],
+        ["tree", "live ms", "p50 ms", "p99 ms", "max ms", "delivered (fewest, cs)"],
         rows,
     )
 

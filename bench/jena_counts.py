@@ -1,6 +1,6 @@
 """Count how much of Jena's own rule material a tspace checkout parses and answers as Jena.
 
-    python bench/jena_counts.py [SPACE_ROOT]
+    python bench/jena_counts.py [SPACE_ROOT] [--json] [--no-plot]
 
 SPACE_ROOT (default: this checkout) is the folder holding the `space` package, so an
 older commit (`git archive <commit> | tar -x -C /tmp/before`) can be measured with
@@ -16,6 +16,8 @@ import re
 import sys
 from pathlib import Path
 from typing import Any
+
+from _output import bench_parser, parse, print_table
 
 HERE = Path(__file__).resolve().parents[1]
 JENA = HERE / "tests" / "data" / "jena"
@@ -96,12 +98,15 @@ def main(root: Path) -> None:
 
     texts = json.loads((JENA / "rule_texts.json").read_text())
     accepted = [t for t in texts if t["jena"].startswith("ok")]
-    print(
-        f"rule texts in Jena's tests that Jena parses: {sum(parses(t['text']) for t in accepted)}"
-        f"/{len(accepted)} parsed"
-    )
     files = sorted((JENA / "etc").glob("*.rules"))
-    print(f"bundled rule files: {sum(parses(f.read_text()) for f in files)}/{len(files)} parsed")
+    rows: list[list[object]] = [
+        [
+            "rule texts in Jena's tests that Jena parses: parsed",
+            sum(parses(t["text"]) for t in accepted),
+            len(accepted),
+        ],
+        ["bundled rule files: parsed", sum(parses(f.read_text()) for f in files), len(files)],
+    ]
     same = total = 0
     answering = set()
     for expected in sorted((JENA / "expected").glob("*.nt")):
@@ -114,10 +119,7 @@ def main(root: Path) -> None:
         if ours is not None and isomorphic(ours, ntriples(answer)):
             same += 1
             answering.add(rules)
-    print(
-        f"bundled rule files on Jena's test data: {same}/{total} closures as Jena's "
-        f"({len(answering)} files: {', '.join(sorted(answering))})"
-    )
+    rows.append(["bundled rule files on Jena's test data: closures as Jena's", same, total])
     cases = sorted((JENA / "cases").glob("*.json"))
     passed = 0
     for case in cases:
@@ -134,8 +136,14 @@ def main(root: Path) -> None:
             continue
         ours = closure(case.with_suffix(".rules"), [case.with_suffix(".data.nt")])
         passed += ours is not None and isomorphic(ours, ntriples(answer))
-    print(f"transcribed Jena test cases: {passed}/{len(cases)} answer as Jena")
+    rows.append(["transcribed Jena test cases: answer as Jena", passed, len(cases)])
+    print_table(
+        f"Jena's rule material through {root}", ["material", "yes (count)", "of (count)"], rows
+    )
+    print(f"closures as Jena's from {len(answering)} files: {', '.join(sorted(answering))}")
 
 
 if __name__ == "__main__":
-    main(Path(sys.argv[1]).resolve() if len(sys.argv) > 1 else HERE)
+    parser = bench_parser(__doc__)
+    parser.add_argument("root", nargs="?", type=Path, default=HERE, help="holds `space`")
+    main(parse(parser).root.resolve())

@@ -17,7 +17,6 @@ whose firings Jena orders otherwise); `other` (unexplained: a bug somewhere).
 
 from __future__ import annotations
 
-import argparse
 import logging
 import random
 import subprocess
@@ -32,6 +31,7 @@ from rdflib.term import Node
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from _output import bench_parser, parse, print_table
 from jena_referee import ROOT, classpath
 
 from space.reasoning import RuleEngine, default_registry, parse_rules
@@ -231,9 +231,11 @@ def main(seed: int, sets: int, steps: int) -> None:
                 tally[label] += 1
                 examples.setdefault(label, f"set {n} state {i}:\n{rules}")
     total = sum(tally.values())
-    print(f"{sets} rule sets, {total} states compared (seed {seed}):")
-    for label, count in tally.most_common():
-        print(f"  {label:18} {count}")
+    print_table(
+        f"{sets} rule sets, {total} states compared (seed {seed})",
+        ["class", "states (count)"],
+        tally.most_common(),
+    )
     for label, example in examples.items():
         if label not in ("agree",):
             print(f"\nexample of {label}: {example}")
@@ -274,9 +276,9 @@ def _key(t: Triple) -> tuple:
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--sets", type=int, default=60)
     parser.add_argument("--steps", type=int, default=6)
-    args = parser.parse_args()
+    args = parse(parser)
     main(args.seed, args.sets, args.steps)

@@ -29,7 +29,6 @@ distinct doubles were acked at 1,000-1,200/s throughout, 2026-11-27).
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import tempfile
 import threading
@@ -39,7 +38,8 @@ import uuid
 from pathlib import Path
 
 import pyoxigraph as ox
-from _harness import OUT, median, percentile, print_table, serve_process
+from _harness import median, percentile, serve_process
+from _output import OUT, bench_parser, parse, print_table
 from rdflib import URIRef
 
 from space import Change, TripleSpace
@@ -203,7 +203,7 @@ def mass_table(
     return print_table(
         f"acked 1-triple write latency, ms, beside a mass expiry of {mass} triples written "
         f"{per} a changeset ({len(next(iter(runs.values())))} runs, interleaved)",
-        ["store, when", "p99 of each run", "p50", "p99", "max", "swept in, s"],
+        ["store, when", "p99 of each run (ms)", "p50 (ms)", "p99 (ms)", "max (ms)", "swept in (s)"],
         rows,
     )
 
@@ -223,13 +223,13 @@ def cluster_lateness(runs: int, probes: int) -> str:
         rows.append((len(late), percentile(late, 50), percentile(late, 99), max(late)))
     return print_table(
         f"expiry lateness on 3 cluster replicas, ms ({probes} probes a run)",
-        ["expired", "p50", "p99", "max"],
+        ["expired", "p50 (ms)", "p99 (ms)", "max (ms)"],
         rows,
     )
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--writes", type=int, default=500)
     parser.add_argument("--live", type=int, default=100_000)
@@ -246,7 +246,7 @@ def main() -> None:
     parser.add_argument(
         "--cluster", type=int, default=0, help="runs of the expiry lateness on 3 replicas only"
     )
-    args = parser.parse_args()
+    args = parse(parser)
     if args.cluster:
         OUT.mkdir(exist_ok=True)
         (OUT / "lifespans-cluster.txt").write_text(cluster_lateness(args.cluster, 200) + "\n")
@@ -267,7 +267,13 @@ def main() -> None:
             if old_ts is not None:
                 rates["permanent (before)"].append(acked_rate(old_ts, args.writes, None))
         rows = [(m, median(v), min(v), max(v)) for m, v in rates.items() if v]
-        text = [print_table("acked 1-triple writes/s", ["mode", "median", "min", "max"], rows)]
+        text = [
+            print_table(
+                "acked 1-triple writes",
+                ["mode", "median writes/s", "min writes/s", "max writes/s"],
+                rows,
+            )
+        ]
 
         rss0 = rss_kb(pid)
         bulk(ts, args.live, 1000, None)
@@ -279,8 +285,8 @@ def main() -> None:
         text.append(
             print_table(
                 f"expiry lateness, ms, {args.live} leased triples live ({len(late)} probes)",
-                ["p50", "p99", "max"],
-                [(percentile(late, 50), percentile(late, 99), max(late))],
+                ["leased triples live", "p50 (ms)", "p99 (ms)", "max (ms)"],
+                [(args.live, percentile(late, 50), percentile(late, 99), max(late))],
             )
         )
         if old_ts is not None:
@@ -297,8 +303,11 @@ def main() -> None:
         text.append(
             print_table(
                 "memory per leased triple, bytes",
-                ["store RSS (leased - permanent)", "in-memory index"],
-                [(per_triple, index_bytes(args.live))],
+                ["measure", "bytes per leased triple"],
+                [
+                    ("store RSS (leased - permanent)", per_triple),
+                    ("in-memory index", index_bytes(args.live)),
+                ],
             )
         )
     OUT.mkdir(exist_ok=True)

@@ -10,9 +10,10 @@ materialised by each system in a fresh process (so peak memory is its own):
 then ours times single-triple deletes and adds (each a data triple taken out
 and put back, p50), and reasonable the same through update_graph + reason().
 Runs alternate between systems so machine noise falls on all alike; the
-table gives medians over --repeat runs. Writes a Markdown table and a PNG.
+table gives medians over --repeat runs. Writes a Markdown table (with --json, a JSON object
+per line per case too) and a PNG (bench/out/owl_rl.png, or --plot PATH).
 
-    python bench/owl_rl.py --departments 43 --repeat 3 --png /tmp/owl_rl.png
+    python bench/owl_rl.py --departments 43 --repeat 3 --plot /tmp/owl_rl.png
     python bench/owl_rl.py --departments 43 425 --repeat 1 --old /path/to/main
 """
 
@@ -31,6 +32,8 @@ import warnings
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _output import bench_parser, json_rows, parse, png
+
 from bench.lubm import write
 
 SYSTEMS = ("ours", "ours-rdflib", "reasonable")
@@ -170,7 +173,7 @@ def run(system: str, folder: Path, updates: int, old: Path | None = None) -> dic
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--departments", type=int, nargs="+", default=[43])
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--updates", type=int, default=20, help="single-triple updates timed")
@@ -180,10 +183,9 @@ def main() -> None:
         "--systems", nargs="+", choices=SYSTEMS, default=list(DEFAULT), help="default: %(default)s"
     )
     parser.add_argument("--old", type=Path, help="a checkout whose code runs beside, as `main`")
-    parser.add_argument("--png", type=Path, default=Path("owl_rl.png"))
     parser.add_argument("--child", help=argparse.SUPPRESS)
     parser.add_argument("--dir", type=Path, help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    args = parse(parser, own_plot=True)
     if args.child:
         print(json.dumps(child(args.child, args.dir, args.updates)))
         return
@@ -209,10 +211,14 @@ def main() -> None:
                     results[system].append(run(system, folder, updates, args.old))
                     print(f"{size} {system} run {i}: {results[system][-1]}", file=sys.stderr)
             rows.append((size, results))
-    table = _table(rows)
-    print(table)
-    _plot([(size, {s: r for s, r in res.items() if s != "owlrl"}) for size, res in rows], args.png)
-    print(f"\nwrote {args.png}")
+    header, cells = _cells(rows)
+    print(_markdown(header, cells))
+    if args.json:
+        print("\n".join(json_rows("OWL 2 RL, medians", header, cells)))
+    path = png(args, "owl_rl.png")
+    if path is not None:
+        _plot([(size, {s: r for s, r in res.items() if s != "owlrl"}) for size, res in rows], path)
+        print(f"\nwrote {path}")
 
 
 def _median(runs: list[dict], key: str) -> float | None:
@@ -220,27 +226,35 @@ def _median(runs: list[dict], key: str) -> float | None:
     return statistics.median(values) if values else None
 
 
-def _table(rows: list) -> str:
-    lines = [
-        "| data triples | system | closure | load+materialise s | CPU s | peak MB "
-        "| CPU, peak vs reasonable | delete p50 ms | add p50 ms |",
-        "|---:|---|---:|---:|---:|---:|---:|---:|---:|",
-    ]
+def _cells(rows: list) -> tuple[list[str], list[list[object]]]:
+    """Return the table's header and rows: medians per system and size, None where not run."""
+    header = ["case", "data triples", "closure triples", "load+materialise s", "CPU s"]
+    header += ["peak MB", "CPU vs reasonable x", "peak vs reasonable x"]
+    header += ["delete p50 ms", "add p50 ms"]
+    cells = []
     for size, results in rows:
         peer = results.get("reasonable")
         for system, runs in results.items():
-            cells = [_median(runs, k) for k in ("load_s", "cpu_s", "peak_mb")]
-            shown = ["-" if c is None else f"{c:,.2f}" for c in cells]
-            ratio = "-"
+            row = [system, size, runs[0]["triples"]]
+            row += [_median(runs, k) for k in ("load_s", "cpu_s", "peak_mb")]
             if peer and system != "reasonable":
-                cpu, peak = (_median(runs, k) / _median(peer, k) for k in ("cpu_s", "peak_mb"))
-                ratio = f"{cpu:.2f}x, {peak:.2f}x"
-            shown.append(ratio)
-            updates = [_median(runs, k) for k in ("delete_p50_ms", "add_p50_ms")]
-            shown += ["-" if c is None else f"{c:,.2f}" for c in updates]
-            lines.append(
-                f"| {size:,} | {system} | {runs[0]['triples']:,} | " + " | ".join(shown) + " |"
-            )
+                row += [_median(runs, k) / _median(peer, k) for k in ("cpu_s", "peak_mb")]
+            else:
+                row += [None, None]
+            row += [_median(runs, k) for k in ("delete_p50_ms", "add_p50_ms")]
+            cells.append(row)
+    return header, cells
+
+
+def _markdown(header: list[str], cells: list[list[object]]) -> str:
+    def shown(c: object) -> str:
+        if c is None:
+            return "-"
+        return f"{c:,}" if isinstance(c, int) else f"{c:,.2f}"
+
+    lines = ["| " + " | ".join(header) + " |", "|---|" + "---:|" * (len(header) - 1)]
+    for row in cells:
+        lines.append("| " + " | ".join([str(row[0]), *map(shown, row[1:])]) + " |")
     return "\n".join(lines)
 
 

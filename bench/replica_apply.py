@@ -30,7 +30,8 @@ import tempfile
 import uuid
 from pathlib import Path
 
-from _harness import code_env, median, print_table
+from _harness import code_env, median
+from _output import bench_parser, parse, print_table
 
 ROBOTS, CHANGESETS = 64, 10_200
 P = "<https://w3id.org/tspace/selfconfig#batteryLevel>"
@@ -136,12 +137,12 @@ def _child(batch: int) -> dict[str, float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--batch", type=int, nargs="+", default=[4, 17, 64])
     parser.add_argument("--old", type=Path, help="a source tree of the code before")
     parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    args = parse(parser)
     if args.child:
         print(json.dumps(apply(args.child)))
         return
@@ -167,7 +168,7 @@ def main() -> None:
     header = ["changesets a commit"]
     for name in trees:
         header += [f"{name}: install us/cs", f"{name}: commit us/cs"]
-    header += ["Oxigraph alone: value replaced", "value and stamp replaced"]
+    header += ["Oxigraph alone: value replaced us/cs", "value and stamp replaced us/cs"]
     print_table(
         f"a replica's apply of functional rewrites, CPU us per changeset, medians of {args.runs}",
         header,

@@ -11,7 +11,6 @@ bridge). CPU: 10 BatteryState and 10 PoseStamped topics at 100 Hz each for
 
 from __future__ import annotations
 
-import argparse
 import os
 import subprocess
 import sys
@@ -20,7 +19,8 @@ import threading
 import time
 from pathlib import Path
 
-from _harness import OUT, median, percentile, print_table, serve
+from _harness import median, percentile, serve
+from _output import OUT, bench_parser, parse, print_table
 from rdflib import Graph, Literal, Namespace
 
 from agents.ros2.codec import Codec
@@ -146,11 +146,11 @@ def load(ts: TripleSpace, codec: Codec, pid: int, seconds: float) -> tuple[float
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--count", type=int, default=200)
     parser.add_argument("--seconds", type=float, default=10.0)
-    args = parser.parse_args()
+    args = parse(parser)
     codec = Codec()
     knowledge = Graph()
     knowledge.parse(REPO / "ontology" / "selfconfig.ttl")

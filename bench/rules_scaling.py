@@ -40,6 +40,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from _output import bench_parser, parse, png
 from rdflib import Literal, Namespace
 
 from space import freeze_startup
@@ -54,7 +55,6 @@ except ImportError:
 ROOT = Path(__file__).resolve().parent.parent
 ONTOLOGY = ROOT / "ontology" / "selfconfig.ttl"
 ROBOT = ROOT / "ontology" / "robots" / "hospital.ttl"
-OUT = ROOT / "bench" / "out"
 AC = Namespace("https://w3id.org/tspace/selfconfig#")
 PAPER = {1: 0.112, 20: 0.324, 40: 0.676, 60: 0.815, 80: 0.989, 100: 1.336}  # seconds
 PAPER |= {120: 1.558, 140: 1.989, 160: 2.222, 180: 2.367, 200: 2.471}
@@ -334,14 +334,14 @@ def report(results: dict[tuple, dict], sizes: list[int], as_json: bool, clock: s
                 )
 
 
-def plot(results: dict[tuple, dict], sizes: list[int]) -> Path:
+def plot(results: dict[tuple, dict], sizes: list[int], path: Path) -> Path:
     """Draw each code's p50 and the paper's mean against the number of rules (log scale)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    OUT.mkdir(parents=True, exist_ok=True)
+    path.parent.mkdir(parents=True, exist_ok=True)
     figure, axis = plt.subplots(figsize=(7, 4.5))
     paper = [n for n in sizes if n in PAPER] or sorted(PAPER)
     axis.plot(paper, [PAPER[n] * 1e3 for n in paper], "o-", label=PAPER_LABEL)
@@ -361,7 +361,6 @@ def plot(results: dict[tuple, dict], sizes: list[int]) -> Path:
     axis.set_title("One update (battery -> very low) and its matches against the number of rules")
     axis.grid(True, which="both", alpha=0.3)
     axis.legend()
-    path = OUT / "rules_scaling.png"
     figure.savefig(path, dpi=120, bbox_inches="tight")
     return path
 
@@ -381,26 +380,25 @@ def main(options: argparse.Namespace) -> None:
             codes["jena"] = lambda _: run_jena(sizes, per_round, options.cpu, Path(work))
         results = collect(codes, rounds)
     report(results, sizes, options.json, "CPU" if options.cpu else "wall-clock")
-    if not options.no_plot:
-        path = plot(results, sizes)
+    path = png(options, "rules_scaling.png")
+    if path is not None:
+        plot(results, sizes, path)
         if not options.json:
             print(f"\nplot: {path}")
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=30, help="measurements per case and code")
     parser.add_argument("--rounds", type=int, default=3, help="alternations of the codes")
-    parser.add_argument("--no-plot", action="store_true", help="skip the PNG")
     parser.add_argument("--cpu", action="store_true", help="time CPU, not wall clock")
-    parser.add_argument("--json", action="store_true", help="one JSON object per line per case")
     parser.add_argument("--jena", action="store_true", help="time Jena 4.5 on the same update")
     parser.add_argument("--old", type=Path, help="a checkout (with .venv) to measure beside")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument(
         "--sizes", type=int, nargs="+", default=sorted(PAPER), help="rule counts (the paper's)"
     )
-    options = parser.parse_args()
+    options = parse(parser, own_json=True, own_plot=True)
     if options.cpu:
         CLOCK[0] = time.process_time
     if options.child:

@@ -13,11 +13,11 @@ Run: python bench/secure.py [--rounds 3] [--runs 40]
 
 from __future__ import annotations
 
-import argparse
 import tempfile
 from pathlib import Path
 
-from _harness import median, percentile, print_table
+from _harness import median, percentile
+from _output import bench_parser, parse, print_table
 from end_to_end import RuleSet, measure
 
 from space import _certs
@@ -61,14 +61,21 @@ def main(rounds: int, runs: int) -> None:
     print_table(
         f'"battery very low" -> last agent acted (ms; {rounds} rounds x {runs} runs, '
         "plain and secure alternating)",
-        ["mode", "runs", "p50 per round", "median of rounds", "p50 all", "p99 all"],
+        [
+            "mode",
+            "runs",
+            "p50 per round (ms)",
+            "median of rounds (ms)",
+            "p50 all (ms)",
+            "p99 all (ms)",
+        ],
         rows,
     )
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--rounds", type=int, default=3, help="plain/secure pairs (default 3)")
     parser.add_argument("--runs", type=int, default=40, help="very low batteries per round")
-    options = parser.parse_args()
+    options = parse(parser)
     main(options.rounds, options.runs)

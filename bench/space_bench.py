@@ -14,7 +14,6 @@ are separate processes talking through the router on loopback.
 
 from __future__ import annotations
 
-import argparse
 import json
 import subprocess
 import sys
@@ -23,7 +22,8 @@ from collections import deque
 from pathlib import Path
 
 import _store_measures as store
-from _harness import code_env, median, percentile, print_table, serve_process
+from _harness import code_env, median, percentile, serve_process
+from _output import bench_parser, parse, plot_tables, png, print_table
 from rdflib import Literal, Namespace, URIRef
 
 from space import Pending, TripleSpace
@@ -183,7 +183,7 @@ def write_path(code: Path | None) -> dict[str, float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--count", type=int, default=1000, help="changesets per latency run")
     parser.add_argument(
@@ -202,7 +202,6 @@ def main() -> None:
         action="store_true",
         help="only `tspace write` of 1,000,000 triples into a fresh store, and its RSS then",
     )
-    parser.add_argument("--plot", type=Path, help="write a PNG of new vs old here")
     parser.add_argument(
         "--latency-only", action="store_true", help="only the write -> notification latency"
     )
@@ -211,7 +210,7 @@ def main() -> None:
         action="store_true",
         help="only the store's own time for a write, in-process, no Zenoh hop (_write_path.py)",
     )
-    args = parser.parse_args()
+    args = parse(parser, own_plot=True)
     codes: dict[str, Path | None] = {"new": None}
     if args.old is not None:
         codes = {"old": args.old.resolve(), "new": None}
@@ -235,9 +234,13 @@ def main() -> None:
         rows.append(
             (m, *(median(v) for v in values), *(f"{min(v):.3f}..{max(v):.3f}" for v in values))
         )
-    print_table(f"tspace space benchmark, medians of {args.runs} runs", header, rows)
-    if args.plot is not None and "old" in results:
-        plot(results, names, args.plot)
+    title = f"tspace space benchmark, medians of {args.runs} runs"
+    print_table(title, header, rows)
+    path = png(args, "space_bench.png")
+    if path is not None and "old" in results:
+        plot(results, names, path)
+    elif path is not None and plot_tables([(title, header, rows)], path):
+        print(f"plot: {path}")
 
 
 def plot(results: dict[str, dict[str, list[float]]], names: list[str], path: Path) -> None:
