@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import statistics
 import subprocess
 import sys
@@ -60,8 +61,7 @@ def run(code: Path | None, count: int, freq: float, space: str) -> list[float]:
                 check=True,
                 env=env,
             )
-            # the first change delivered is the writer's warm-up (sent at 0): not one measured
-            delays = [int(x) / 1e6 for x in sub.stdout.readline().split()][1:]
+            delays = [int(x) / 1e6 for x in sub.stdout.readline().split()]
             sub.wait(timeout=10)
         finally:
             router.close()
@@ -82,7 +82,8 @@ def main() -> None:
     for i in range(args.runs):
         for name, code in trees:
             d = run(code, args.count, args.freq, f"gap{i}{name}")
-            live = statistics.median(live_delays(d))
+            through = live_delays(d)  # none when the router dropped nothing (a short run)
+            live = statistics.median(through) if through else math.nan
             figures[name].append((live, percentile(d, 50), percentile(d, 99), max(d), len(d)))
             print(f"run {i} {name}: live {live:.2f} ms, p50 {figures[name][-1][1]:.2f} ms")
     rows = [
