@@ -192,3 +192,36 @@ def test_a_format_2_log_is_rewritten_one_quad_a_changeset_keeping_replays_and_re
     assert len([r for r in rows if r[0] == "3"]) == 1  # one quad a changeset
     marker = store.quads_for_pattern(None, ox.NamedNode("urn:tspace:format"), None, None)
     assert [q.object.value for q in marker] == ["3"]
+
+
+def test_a_directory_of_a_newer_format_is_refused_in_one_line_and_left_as_it_was(
+    tmp_path: Path,
+):
+    """A tspace older than its data directory must not read it as its own format, nor
+    rewrite its marker: the newer tspace that wrote it would then misread it too."""
+    import pyoxigraph as ox
+
+    data = tmp_path / "data"
+    data.mkdir()
+    store = ox.Store(str(data / "oxigraph"))
+    marker = ox.Quad(
+        ox.NamedNode("urn:tspace:store"),
+        ox.NamedNode("urn:tspace:format"),
+        ox.Literal("99"),
+        ox.NamedNode("urn:tspace:meta"),
+    )
+    store.add(marker)
+    store.flush()
+    del store
+    port = free_port()
+    done = subprocess.run(
+        tspace_cmd("serve", "--listen", f"tcp/127.0.0.1:{port}", "--data", str(data)),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 1
+    lines = [line for line in done.stderr.splitlines() if line.startswith("tspace serve:")]
+    assert len(lines) == 1 and "format 99" in lines[0] and "newer" in lines[0], done.stderr
+    store = ox.Store(str(data / "oxigraph"))
+    assert list(store.quads_for_pattern(marker.subject, marker.predicate, None, None)) == [marker]
