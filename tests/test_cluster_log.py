@@ -148,6 +148,27 @@ def test_a_busy_log_waits_for_the_writers_on_their_way_an_idle_one_sends_at_once
     asyncio.run(main())
 
 
+def test_a_lone_writer_long_after_a_busy_transaction_is_sent_at_once(cluster):
+    """The log is busy only while the writers of its last transaction can be on their way
+    back: one writing alone a while after a burst is not held `linger` for them."""
+    linger = 2.0
+
+    async def main() -> None:
+        client = EtcdClient(cluster.endpoints)
+        await client.open()
+        clog = ClusterLog(client, inflight=8, pipeline=32, linger=linger, linger_from=8)
+        await clog.start()
+        await asyncio.gather(*(clog.append(Entry("s", b"burst%d" % i)) for i in range(8)))
+        assert clog.transactions == 1  # the burst went together: its transaction was busy
+        await asyncio.sleep(clog.busy_for * 2)  # then nobody writes for a while
+        began = time.monotonic()
+        await clog.append(Entry("s", b"alone"))
+        assert time.monotonic() - began < linger
+        await _close(client, clog)
+
+    asyncio.run(main())
+
+
 def test_writes_of_one_key_commit_in_the_order_they_were_appended(cluster):
     """Two transactions are in flight at once; per key, the later append never overtakes."""
 
