@@ -83,11 +83,12 @@ class StoreDB:
     Raises:
         DataDirInUse: another process holds the directory.
         OldDataDir: (from `migrate`) an old SQLite directory that was not migrated.
+        NewerDataDir: (from `migrate`) a newer tspace wrote it.
         OSError: the directory cannot be created or read.
     """
 
     def __init__(self, data_dir: Path, *, durable: bool = False, log_keep: int = 100_000) -> None:
-        from space.store.migrate import open_store
+        from space.store.migrate import format_marks, open_store
 
         data_dir.mkdir(parents=True, exist_ok=True)
         self.data_dir = data_dir
@@ -101,6 +102,7 @@ class StoreDB:
             if not self.path.exists():
                 raise
             self.store = ox.Store.read_only(str(self.path))
+            format_marks(self.store, data_dir)  # not migrated, but a newer one is refused
             self.open_error = f"the database opened read-only: {exc}"
         self._commits: dict[str, int] = {}  # per space, since its last compaction
         # A cluster replica's revision quad(s) as its last commit left them (None: not read).
