@@ -169,6 +169,24 @@ def test_a_lone_writer_long_after_a_busy_transaction_is_sent_at_once(cluster):
     asyncio.run(main())
 
 
+def test_a_busy_log_does_not_wait_when_a_full_pipeline_of_changesets_waits(cluster):
+    """The wait is for a few changesets to become many: once `pipeline` wait, they go."""
+    linger = 5.0
+
+    async def main() -> None:
+        client = EtcdClient(cluster.endpoints)
+        await client.open()
+        clog = ClusterLog(client, inflight=8, pipeline=32, linger=linger, linger_from=8)
+        await clog.start()
+        await asyncio.gather(*(clog.append(Entry("s", b"busy%d" % i)) for i in range(8)))
+        began = time.monotonic()
+        await asyncio.gather(*(clog.append(Entry("s", b"many%d" % i)) for i in range(40)))
+        assert time.monotonic() - began < linger
+        await _close(client, clog)
+
+    asyncio.run(main())
+
+
 def test_writes_of_one_key_commit_in_the_order_they_were_appended(cluster):
     """Two transactions are in flight at once; per key, the later append never overtakes."""
 
