@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from rdflib import Literal, Namespace
 
-from conftest import AC_NS, Server, wait_for
+from conftest import AC_NS, Server, newer_format_dir, serve_refusal, wait_for
 from space import ChangesetRejected, SpaceError, TripleSpace
 
 AC = Namespace(AC_NS)
@@ -107,31 +107,7 @@ def test_a_read_only_data_directory_serves_reads_refuses_writes_then_resumes(dis
 def test_a_read_only_directory_of_a_newer_format_is_refused_too(disk: Path):
     """Opened read-only (nothing could be rewritten), a newer format is still not served as
     this one: its log and state would be misread."""
-    import pyoxigraph as ox
-
-    from conftest import free_port, tspace_cmd
-
     data = disk / "data"
-    data.mkdir()
-    store = ox.Store(str(data / "oxigraph"))
-    store.add(
-        ox.Quad(
-            ox.NamedNode("urn:tspace:store"),
-            ox.NamedNode("urn:tspace:format"),
-            ox.Literal("99"),
-            ox.NamedNode("urn:tspace:meta"),
-        )
-    )
-    store.flush()
-    del store
+    newer_format_dir(data)
     subprocess.run(["mount", "-o", "remount,ro", str(disk)], check=True)
-    port = free_port()
-    done = subprocess.run(
-        tspace_cmd("serve", "--listen", f"tcp/127.0.0.1:{port}", "--data", str(data)),
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    assert done.returncode == 1
-    lines = [line for line in done.stderr.splitlines() if line.startswith("tspace serve:")]
-    assert len(lines) == 1 and "format 99" in lines[0], done.stderr
+    assert "format 99" in serve_refusal(data)

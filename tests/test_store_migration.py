@@ -10,7 +10,7 @@ from pathlib import Path
 import msgpack
 from rdflib import Literal, Namespace
 
-from conftest import AC_NS, Server, free_port, tspace_cmd, wait_for
+from conftest import AC_NS, Server, newer_format_dir, serve_refusal, tspace_cmd, wait_for
 from space import Changeset, TripleSpace
 
 AC = Namespace(AC_NS)
@@ -91,16 +91,7 @@ def test_an_unreadable_old_database_is_refused_in_one_line_naming_the_command(tm
     data = tmp_path / "data"
     data.mkdir()
     (data / "space.sqlite3").write_bytes(b"not a database at all" * 100)
-    port = free_port()
-    done = subprocess.run(
-        tspace_cmd("serve", "--listen", f"tcp/127.0.0.1:{port}", "--data", str(data)),
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    assert done.returncode == 1
-    lines = [line for line in done.stderr.splitlines() if line.startswith("tspace serve:")]
-    assert len(lines) == 1 and "python -m space.store.migrate" in lines[0], done.stderr
+    assert "python -m space.store.migrate" in serve_refusal(data)
 
 
 def _format2_dir(data: Path) -> None:
@@ -202,27 +193,9 @@ def test_a_directory_of_a_newer_format_is_refused_in_one_line_and_left_as_it_was
     import pyoxigraph as ox
 
     data = tmp_path / "data"
-    data.mkdir()
-    store = ox.Store(str(data / "oxigraph"))
-    marker = ox.Quad(
-        ox.NamedNode("urn:tspace:store"),
-        ox.NamedNode("urn:tspace:format"),
-        ox.Literal("99"),
-        ox.NamedNode("urn:tspace:meta"),
-    )
-    store.add(marker)
-    store.flush()
-    del store
-    port = free_port()
-    done = subprocess.run(
-        tspace_cmd("serve", "--listen", f"tcp/127.0.0.1:{port}", "--data", str(data)),
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    assert done.returncode == 1
-    lines = [line for line in done.stderr.splitlines() if line.startswith("tspace serve:")]
-    assert len(lines) == 1 and "format 99" in lines[0] and "newer" in lines[0], done.stderr
+    marker = newer_format_dir(data)
+    line = serve_refusal(data)
+    assert "format 99" in line and "newer" in line
     store = ox.Store(str(data / "oxigraph"))
     assert list(store.quads_for_pattern(marker.subject, marker.predicate, None, None)) == [marker]
 
