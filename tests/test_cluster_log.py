@@ -122,11 +122,15 @@ def test_changesets_arriving_one_by_one_during_a_transaction_go_together_in_the_
     asyncio.run(main())
 
 
-async def _lingering(cluster, linger: float) -> tuple[EtcdClient, ClusterLog]:
+async def _lingering(
+    cluster, linger: float, busy_for: float = 0.05
+) -> tuple[EtcdClient, ClusterLog]:
     """A log as a replica runs it, busy after 8 changesets in a transaction."""
     client = EtcdClient(cluster.endpoints)
     await client.open()
-    clog = ClusterLog(client, inflight=8, pipeline=32, linger=linger, linger_from=8)
+    clog = ClusterLog(
+        client, inflight=8, pipeline=32, linger=linger, linger_from=8, busy_for=busy_for
+    )
     await clog.start()
     return client, clog
 
@@ -141,7 +145,8 @@ def test_a_busy_log_waits_for_the_writers_on_their_way_an_idle_one_sends_at_once
     linger = 2.0
 
     async def main() -> None:
-        client, clog = await _lingering(cluster, linger)
+        # busy for as long as it waits: a loaded machine may run this test's next line late
+        client, clog = await _lingering(cluster, linger, busy_for=linger)
         began = time.monotonic()
         await clog.append(Entry("s", b"alone"))
         assert time.monotonic() - began < linger  # idle: sent at once
