@@ -218,3 +218,36 @@ async def _until_writable(endpoints: list[str], timeout: float = 20.0) -> None:
                     raise
     finally:
         await client.close()
+
+
+def serve_refusal(data: Path) -> str:
+    """Run `tspace serve` on a data directory it must refuse; return its one line saying why."""
+    done = subprocess.run(
+        tspace_cmd("serve", "--listen", f"tcp/127.0.0.1:{free_port()}", "--data", str(data)),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 1, done.stderr
+    lines = [line for line in done.stderr.splitlines() if line.startswith("tspace serve:")]
+    assert len(lines) == 1, done.stderr
+    return lines[0]
+
+
+def newer_format_dir(data: Path) -> object:
+    """Make `data` a directory whose store a newer tspace wrote (format 99); return its
+    marker quad."""
+    import pyoxigraph as ox
+
+    data.mkdir()
+    store = ox.Store(str(data / "oxigraph"))
+    marker = ox.Quad(
+        ox.NamedNode("urn:tspace:store"),
+        ox.NamedNode("urn:tspace:format"),
+        ox.Literal("99"),
+        ox.NamedNode("urn:tspace:meta"),
+    )
+    store.add(marker)
+    store.flush()
+    del store
+    return marker

@@ -122,19 +122,35 @@ def test_changesets_arriving_one_by_one_during_a_transaction_go_together_in_the_
     asyncio.run(main())
 
 
+async def _lingering(
+    cluster, linger: float, busy_for: float = 0.05
+) -> tuple[EtcdClient, ClusterLog]:
+    """A log as a replica runs it, busy after 8 changesets in a transaction."""
+    client = EtcdClient(cluster.endpoints)
+    await client.open()
+    clog = ClusterLog(
+        client, inflight=8, pipeline=32, linger=linger, linger_from=8, busy_for=busy_for
+    )
+    await clog.start()
+    return client, clog
+
+
+async def _burst(clog: ClusterLog) -> None:
+    """Append 8 changesets at once (one transaction: the log is busy after it)."""
+    await asyncio.gather(*(clog.append(Entry("s", b"busy%d" % i)) for i in range(8)))
+
+
 def test_a_busy_log_waits_for_the_writers_on_their_way_an_idle_one_sends_at_once(cluster):
     """After a transaction of `linger_from` entries the next waits `linger`; not after less."""
     linger = 2.0
 
     async def main() -> None:
-        client = EtcdClient(cluster.endpoints)
-        await client.open()
-        clog = ClusterLog(client, inflight=8, pipeline=32, linger=linger, linger_from=8)
-        await clog.start()
+        # busy for as long as it waits: a loaded machine may run this test's next line late
+        client, clog = await _lingering(cluster, linger, busy_for=linger)
         began = time.monotonic()
         await clog.append(Entry("s", b"alone"))
         assert time.monotonic() - began < linger  # idle: sent at once
-        await asyncio.gather(*(clog.append(Entry("s", b"busy%d" % i)) for i in range(8)))
+        await _burst(clog)
         assert clog.transactions == 2  # the eight went together: the log is busy
         one = asyncio.ensure_future(clog.append(Entry("s", b"one")))
         await asyncio.sleep(0.2)  # a writer of the last transaction, on its way back
@@ -142,6 +158,39 @@ def test_a_busy_log_waits_for_the_writers_on_their_way_an_idle_one_sends_at_once
         assert (await one).revision == (await two).revision
         began = time.monotonic()
         await clog.append(Entry("s", b"alone again"))  # the last carried two: idle again
+        assert time.monotonic() - began < linger
+        await _close(client, clog)
+
+    asyncio.run(main())
+
+
+def test_a_lone_writer_long_after_a_busy_transaction_is_sent_at_once(cluster):
+    """The log is busy only while the writers of its last transaction can be on their way
+    back: one writing alone a while after a burst is not held `linger` for them."""
+    linger = 2.0
+
+    async def main() -> None:
+        client, clog = await _lingering(cluster, linger)
+        await _burst(clog)
+        assert clog.transactions == 1  # the burst went together: its transaction was busy
+        await asyncio.sleep(clog.busy_for * 2)  # then nobody writes for a while
+        began = time.monotonic()
+        await clog.append(Entry("s", b"alone"))
+        assert time.monotonic() - began < linger
+        await _close(client, clog)
+
+    asyncio.run(main())
+
+
+def test_a_busy_log_does_not_wait_when_a_full_pipeline_of_changesets_waits(cluster):
+    """The wait is for a few changesets to become many: once `pipeline` wait, they go."""
+    linger = 5.0
+
+    async def main() -> None:
+        client, clog = await _lingering(cluster, linger)
+        await _burst(clog)
+        began = time.monotonic()
+        await asyncio.gather(*(clog.append(Entry("s", b"many%d" % i)) for i in range(40)))
         assert time.monotonic() - began < linger
         await _close(client, clog)
 

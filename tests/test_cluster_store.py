@@ -26,7 +26,7 @@ from rdflib import Literal, URIRef
 from rdflib.namespace import OWL, RDF
 
 from conftest import Server, free_port, tspace_cmd, wait_for
-from space import TripleSpace
+from space import Changeset, TripleSpace
 from space.cluster_status import ClusterWatch
 from space.errors import NoQuorum, SpaceError
 
@@ -297,3 +297,25 @@ def test_the_hmi_shows_its_replicas_quorum(replicas: list[Server], etcd_cluster,
         wait_for(lambda: _quorum_on_page(port) == [(1, False)], 30, "no quorum shown", hmi.logs)
     finally:
         hmi.stop()
+
+
+def test_a_retry_on_another_replica_is_told_what_its_first_outcome_dropped(
+    replicas: list[Server],
+) -> None:
+    """Exactly once means the first outcome, all of it: a changeset whose functional value lost
+    to a newer one, sent again to another replica, is told again what was not applied."""
+    level = URIRef(EX + "level")
+    with _open(replicas[0], "dropped") as a, _open(replicas[2], "dropped") as c:
+        a.write([(level, RDF.type, OWL.FunctionalProperty)])
+        a.write([(_s(1), level, Literal(20))])
+        stale = Changeset(
+            id="robot 7/level #1",  # escaped in the log's IRI
+            agent="test",
+            timestamp="1/0000000000000000",  # older than the value held
+            added=[(_s(1), level, Literal(10)), (_s(2), URIRef(EX + "at"), Literal("dock"))],
+        )
+        first = a.send(stale)
+        assert [d.reason for d in first.dropped] and "newer value" in first.dropped[0].reason
+        again = c.send(stale)
+        assert again.again and again.seq == first.seq
+        assert [d.reason for d in again.dropped] == [d.reason for d in first.dropped]

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from rdflib import Literal, Namespace
 
-from conftest import AC_NS, Server, wait_for
+from conftest import AC_NS, Server, newer_format_dir, serve_refusal, wait_for
 from space import ChangesetRejected, SpaceError, TripleSpace
 
 AC = Namespace(AC_NS)
@@ -102,3 +102,12 @@ def test_a_read_only_data_directory_serves_reads_refuses_writes_then_resumes(dis
         raise
     finally:
         srv.stop()
+
+
+def test_a_read_only_directory_of_a_newer_format_is_refused_too(disk: Path):
+    """Opened read-only (nothing could be rewritten), a newer format is still not served as
+    this one: its log and state would be misread."""
+    data = disk / "data"
+    newer_format_dir(data)
+    subprocess.run(["mount", "-o", "remount,ro", str(disk)], check=True)
+    assert "format 99" in serve_refusal(data)

@@ -34,3 +34,25 @@ def test_the_log_keeps_the_latest_entries_each_found_by_seq_and_by_request_id(tm
         assert db.outcome("log", "never sent") is None
     finally:
         db.close()
+
+
+def test_compactions_after_a_restart_keep_exactly_the_latest_entries(tmp_path: Path):
+    """The first compaction of a process finds the old entries by reading the log, the next
+    ones name the entries since the last cut: each leaves exactly the `log_keep` latest."""
+    keep, seq = 10, 0
+    # a restart between: the last cut is not remembered across it
+    for commits, cut in ((COMPACT_EVERY + 5, COMPACT_EVERY - keep), (2 * COMPACT_EVERY, None)):
+        db = StoreDB(tmp_path, log_keep=keep)
+        try:
+            for _ in range(commits):
+                seq += 1
+                db.commit([_entry(seq)])
+                if seq == 2 * COMPACT_EVERY + 5:  # the first compaction after the restart
+                    assert db.outcome("log", f"req {seq - keep}/x") is None
+            cut = cut or seq - keep  # the second one after it: the seq of its last commit
+            assert [n for n, _ in db.log("log", 1, seq)] == list(range(cut + 1, seq + 1))
+            assert db.outcome("log", f"req {cut}/x") is None
+            first = _entry(cut + 1)
+            assert db.outcome("log", first.request) == (cut + 1, first.payload, first.dropped)
+        finally:
+            db.close()

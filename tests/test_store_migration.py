@@ -10,7 +10,7 @@ from pathlib import Path
 import msgpack
 from rdflib import Literal, Namespace
 
-from conftest import AC_NS, Server, free_port, tspace_cmd
+from conftest import AC_NS, Server, newer_format_dir, serve_refusal, tspace_cmd, wait_for
 from space import Changeset, TripleSpace
 
 AC = Namespace(AC_NS)
@@ -91,16 +91,7 @@ def test_an_unreadable_old_database_is_refused_in_one_line_naming_the_command(tm
     data = tmp_path / "data"
     data.mkdir()
     (data / "space.sqlite3").write_bytes(b"not a database at all" * 100)
-    port = free_port()
-    done = subprocess.run(
-        tspace_cmd("serve", "--listen", f"tcp/127.0.0.1:{port}", "--data", str(data)),
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    assert done.returncode == 1
-    lines = [line for line in done.stderr.splitlines() if line.startswith("tspace serve:")]
-    assert len(lines) == 1 and "python -m space.store.migrate" in lines[0], done.stderr
+    assert "python -m space.store.migrate" in serve_refusal(data)
 
 
 def _format2_dir(data: Path) -> None:
@@ -192,3 +183,107 @@ def test_a_format_2_log_is_rewritten_one_quad_a_changeset_keeping_replays_and_re
     assert len([r for r in rows if r[0] == "3"]) == 1  # one quad a changeset
     marker = store.quads_for_pattern(None, ox.NamedNode("urn:tspace:format"), None, None)
     assert [q.object.value for q in marker] == ["3"]
+
+
+def test_a_directory_of_a_newer_format_is_refused_in_one_line_and_left_as_it_was(
+    tmp_path: Path,
+):
+    """A tspace older than its data directory must not read it as its own format, nor
+    rewrite its marker: the newer tspace that wrote it would then misread it too."""
+    import pyoxigraph as ox
+
+    data = tmp_path / "data"
+    marker = newer_format_dir(data)
+    line = serve_refusal(data)
+    assert "format 99" in line and "newer" in line
+    store = ox.Store(str(data / "oxigraph"))
+    assert list(store.quads_for_pattern(marker.subject, marker.predicate, None, None)) == [marker]
+
+
+def _big_format2_dir(data: Path, entries: int) -> dict[int, tuple[str, bytes, bytes]]:
+    """A format 2 directory whose space `big` logged `entries` changesets; return each seq's
+    request id, payload and what its writer was told was dropped."""
+    import base64
+
+    import pyoxigraph as ox
+
+    root = "urn:tspace:"
+    store = ox.Store(str(data / "oxigraph"))
+    meta, log = ox.NamedNode(root + "meta"), ox.NamedNode(root + "log:big")
+    quads = [
+        ox.Quad(ox.NamedNode(root + "store"), ox.NamedNode(root + "format"), ox.Literal("2"), meta),
+        ox.Quad(
+            ox.NamedNode(root + "space:big"),
+            ox.NamedNode(root + "seq"),
+            ox.Literal(str(entries), datatype=ox.NamedNode(XSD_INT)),
+            meta,
+        ),
+    ]
+    logged = {}
+    for seq in range(1, entries + 1):
+        ident = f"robot {seq % 7}/{seq}"  # to be percent-encoded in the IRI
+        payload = msgpack.packb({"v": 1, "id": ident, "agent": "a", "ts": TS, "seq": seq})
+        dropped = msgpack.packb([{"reason": f"why {seq}"}]) if seq % 5 == 0 else b""
+        logged[seq] = (ident, payload, dropped)
+        rows = {
+            "n": ox.Literal(str(seq), datatype=ox.NamedNode(XSD_INT)),
+            "payload": ox.Literal(base64.b64encode(payload).decode()),
+            "request": ox.Literal(ident),
+        }
+        if dropped:
+            rows["dropped"] = ox.Literal(base64.b64encode(dropped).decode())
+        entry = ox.NamedNode(f"{root}log:big:{seq}")
+        quads += [ox.Quad(entry, ox.NamedNode(root + p), o, log) for p, o in rows.items()]
+    store.bulk_extend(quads)
+    store.flush()
+    del store
+    return logged
+
+
+def _log_left(data: Path) -> tuple[str, int, int]:
+    """Return the format marker, and the entries of format 2 and 3 in the log, as on disk."""
+    import pyoxigraph as ox
+
+    store = ox.Store.read_only(str(data / "oxigraph"))
+    log = ox.NamedNode("urn:tspace:log:big")
+    marker = [
+        q.object.value
+        for q in store.quads_for_pattern(None, ox.NamedNode("urn:tspace:format"), None, None)
+    ]
+    old = sum(1 for _ in store.quads_for_pattern(None, ox.NamedNode("urn:tspace:n"), None, log))
+    new = sum(
+        1
+        for q in store.quads_for_pattern(None, None, None, log)
+        if q.predicate.value.startswith("urn:tspace:req:")
+    )
+    return ",".join(marker), old, new
+
+
+def test_a_log_rewrite_killed_midway_goes_on_from_where_it_stopped(tmp_path: Path):
+    """kill -9 during the rewrite of a format 2 log: the next open finishes it, and every
+    changeset is still found by its seq and by its request id, with what was dropped."""
+    from space.store.db import StoreDB
+
+    data = tmp_path / "data"
+    data.mkdir()
+    entries = 20_000
+    logged = _big_format2_dir(data, entries)
+    argv = [tspace_cmd()[0], "-m", "space.store.migrate", str(data)]
+    proc = subprocess.Popen(argv, stderr=subprocess.DEVNULL)
+    try:
+        wait_for(lambda: _log_left(data)[2] > 0, 60, "a first thousand entries rewritten")
+        proc.kill()
+    finally:
+        proc.wait()
+    marker, old, new = _log_left(data)
+    assert marker == "2" and old > 0 and old + new == entries  # cut midway, nothing lost
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert _log_left(data) == ("3", 0, entries)
+    db = StoreDB(data)
+    try:
+        assert db.log("big", 1, entries) == [(s, p) for s, (_, p, _) in logged.items()]
+        for seq, (ident, payload, dropped) in logged.items():
+            assert db.outcome("big", ident) == (seq, payload, dropped)
+    finally:
+        db.close()

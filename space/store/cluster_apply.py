@@ -39,7 +39,7 @@ def install(
 
     Returns:
         Every changeset installed with its space, and those among them that are
-        this replica's flights (their entries keep what their decision dropped).
+        this replica's flights.
     """
     nets: Installed = []
     ours: Ours = []
@@ -65,7 +65,6 @@ def install(
                 flight = by_payload.get(payload)
                 expiry.applied(state.name, payload, net, ours=flight is not None)
                 if flight is not None:
-                    net.entry.dropped = flight.net.entry.dropped
                     ours.append((flight, net))
     return nets, ours
 

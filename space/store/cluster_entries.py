@@ -50,6 +50,17 @@ class Decision:
     request: str = ""  # the writer's request id: committed once, whichever replica decides
 
 
+def logged_payload(payload: bytes, dropped: bytes) -> bytes:
+    """Return the payload etcd logs for a changeset: with what its writer was told was not
+    applied, if anything (`DROPPED`), so that every replica's log tells a retry the same."""
+    if not dropped:
+        return payload
+    return msgpack.packb({**msgpack.unpackb(payload), DROPPED: msgpack.unpackb(dropped)})
+
+
+DROPPED = "dropped"  # the key of a logged payload that `ClusterSpace.install_at` takes out
+
+
 def line(t: Text) -> str:
     """Return a triple's N-Triples line."""
     return f"{t[0]} {t[1]} {t[2]} .\n"

@@ -16,7 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from space.store import oxterms
-from space.store.cluster_entries import Decision, entry_for
+from space.store.cluster_entries import Decision, entry_for, logged_payload
 from space.store.cluster_state import ClusterSpace
 from space.store.etcd_log import Entry, Position
 from space.store.state import Net
@@ -62,7 +62,7 @@ def guarded_entry(
     replaced = list(dict.fromkeys((t[0], t[1]) for t in (*add, *rem) if t[1] in functional))
     decision = Decision(
         space=state.name,
-        payload=net.entry.payload,
+        payload=logged_payload(net.entry.payload, net.entry.dropped),
         revision=revision,
         stamp=stamp,
         functional=functional,

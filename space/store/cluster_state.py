@@ -23,6 +23,7 @@ from collections import ChainMap
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload
 from space.prefixes import PrefixMap
+from space.store.cluster_entries import DROPPED
 from space.store.db import StoreDB
 from space.store.db_layout import Entry
 from space.store.intake import WriteRequest
@@ -56,12 +57,16 @@ class ClusterSpace(SpaceState):
     def install_at(self, payload: bytes, seq: int) -> Net:
         """Apply a committed changeset as number `seq` of the space; return it to commit.
 
+        The entry keeps what its writer was told was not applied (`logged_payload`), on
+        every replica: a retry sent to any of them is told the same.
+
         Raises:
             MalformedPayload: not a changeset (the log holds only what replicas decided).
         """
         wire = unpack(payload)
         if not isinstance(wire, dict):
             raise MalformedPayload("a logged changeset is a map")
+        dropped = wire.pop(DROPPED, None)  # for the log entry, not the changeset published
         wire["seq"] = seq
         bindings = wire.get("prefixes") or {}
         # New to the database, also when our own decision already taught them to `prefixes`.
@@ -72,6 +77,8 @@ class ClusterSpace(SpaceState):
         finally:
             self._stamps = ChainMap(self._flying_stamps, self._applied_stamps)  # type: ignore[assignment]
         net.entry.prefixes = new
+        if dropped:
+            net.entry.dropped = pack(dropped)
         self._applied_prefixes.update(new)
         return net
 

@@ -83,11 +83,12 @@ class StoreDB:
     Raises:
         DataDirInUse: another process holds the directory.
         OldDataDir: (from `migrate`) an old SQLite directory that was not migrated.
+        NewerDataDir: (from `migrate`) a newer tspace wrote it.
         OSError: the directory cannot be created or read.
     """
 
     def __init__(self, data_dir: Path, *, durable: bool = False, log_keep: int = 100_000) -> None:
-        from space.store.migrate import open_store
+        from space.store.migrate import format_marks, open_store
 
         data_dir.mkdir(parents=True, exist_ok=True)
         self.data_dir = data_dir
@@ -101,8 +102,10 @@ class StoreDB:
             if not self.path.exists():
                 raise
             self.store = ox.Store.read_only(str(self.path))
+            format_marks(self.store, data_dir)  # not migrated, but a newer one is refused
             self.open_error = f"the database opened read-only: {exc}"
         self._commits: dict[str, int] = {}  # per space, since its last compaction
+        self._cut: dict[str, int] = {}  # per space, the log's last cut (entries <= it are gone)
         # A cluster replica's revision quad(s) as its last commit left them (None: not read).
         self.revision_objects: list[str] | None = None
         self.values = Values()  # functional pairs' objects, as `objects` read them
@@ -262,24 +265,36 @@ class StoreDB:
         """Forget a space's older sequence numbers, and log entries older than the `log_keep`
         latest (their request ids with them).
 
-        An entry's seq is in its IRI only (`db_layout`): the log is read whole to find
-        the old ones, once every `COMPACT_EVERY` commits.
+        An entry's seq is in its IRI only (`db_layout`): the entries since the last cut
+        are named by their IRIs; the first cut of a process (or after a space's seq went
+        back or leapt) reads the whole log to find the old ones, which costs a replica's
+        worker ~0.3 s at 100,000 entries, where the entries named cost ~0.02 s.
         """
         g, m, node = log_graph(space).value, META.value, space_node(space).value
         ops = [
             f"DELETE {{ GRAPH <{m}> {{ <{node}> <{SEQ.value}> ?n }} }} WHERE {{ GRAPH <{m}> "
             f"{{ <{node}> <{SEQ.value}> ?n FILTER(?n < {seq}) }} }}"
         ]
-        if seq > self.log_keep:
+        cut, last = seq - self.log_keep, self._cut.get(space, -1)
+        if 0 <= last < cut <= last + 2 * COMPACT_EVERY:
+            named = " ".join(f"<{g}:{n}>" for n in range(last + 1, cut + 1))
+            ops.append(
+                f"DELETE {{ GRAPH <{g}> {{ ?e ?p ?o }} }} WHERE {{ VALUES ?e {{ {named} }} "
+                f"GRAPH <{g}> {{ ?e ?p ?o }} }}"
+            )
+        elif cut > 0:
             number = f'<{INT.value}>(STRAFTER(STR(?e), "{g}:"))'
             ops.append(
                 f"DELETE {{ GRAPH <{g}> {{ ?e ?p ?o }} }} WHERE {{ GRAPH <{g}> "
-                f"{{ ?e ?p ?o }} FILTER({number} <= {seq - self.log_keep}) }}"
+                f"{{ ?e ?p ?o }} FILTER({number} <= {cut}) }}"
             )
         try:
             self.store.update(" ;\n".join(ops))
         except OSError as exc:  # the log is only longer than it should be; say so
             log.error("could not compact the log of %s: %s", space, exc)
+            return
+        if cut > 0:
+            self._cut[space] = cut
 
     def log(self, space: str, first: int, last: int) -> list[tuple[int, bytes]]:
         """Return the logged changesets `first..last` (inclusive) still kept."""

@@ -105,6 +105,7 @@ class ClusterLog:
         pipeline: int = 1,
         linger: float = 0.0,
         linger_from: int = 8,
+        busy_for: float = 0.05,
     ) -> None:
         self.client = client
         self.root = root
@@ -116,11 +117,15 @@ class ClusterLog:
         # With fewer than this many entries queued, no transaction starts while one is in
         # flight: they wait for its reply and go together in the next one.
         self.pipeline = pipeline
-        # While the log is busy (its last transaction carried `linger_from` entries or more),
-        # a transaction waits `linger` seconds before it starts, unless `pipeline` entries
-        # wait: the writers of the last one are on their way back, and go in this one.
-        self.linger, self.linger_from = linger, linger_from
+        # While the log is busy (its last transaction carried `linger_from` entries or more,
+        # and committed less than `busy_for` seconds ago), a transaction waits `linger`
+        # seconds before it starts, unless `pipeline` entries wait: the writers of the last
+        # one are on their way back, and go in this one. `busy_for` is about an ack's p50
+        # with 64 writers on two loaded cores (docs/performance.md): a writer that comes
+        # back later than that is not one of them, and a lone one after a burst waits not.
+        self.linger, self.linger_from, self.busy_for = linger, linger_from, busy_for
         self._last = 0  # entries in the last transaction committed
+        self._last_at = 0.0  # when (the loop's clock)
         self.flying = 0  # transactions in flight now
         self.transactions = 0  # committed transactions, for the benchmark's batch size
         self._queue: list[_Waiting] = []
@@ -204,6 +209,7 @@ class ClusterLog:
         queued = len(self._queue)
         return bool(self.linger and queued and queued < self.pipeline) and (
             self._last >= self.linger_from
+            and asyncio.get_running_loop().time() - self._last_at < self.busy_for
         )
 
     def _take_batch(self) -> tuple[list[_Waiting], set[bytes]]:
@@ -264,7 +270,7 @@ class ClusterLog:
 
     def _resolve(self, batch: list[_Waiting], revision: int) -> None:
         self.transactions += 1
-        self._last = len(batch)
+        self._last, self._last_at = len(batch), asyncio.get_running_loop().time()
         counters: dict[str, int] = {}
         for entry, future in batch:
             index = counters.get(entry.space, 0)

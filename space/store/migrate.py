@@ -38,12 +38,17 @@ class OldDataDir(SpaceError):
     """A data directory in an older format that could not be migrated."""
 
 
+class NewerDataDir(SpaceError):
+    """A data directory written by a newer tspace, in a format this one cannot read."""
+
+
 def open_store(data_dir: Path, path: Path) -> ox.Store:
     """Open (creating if needed) the Oxigraph store at `path`, migrating `data_dir`'s SQLite.
 
     Raises:
         DataDirInUse: another process holds the database.
         OldDataDir: the old database could not be read.
+        NewerDataDir: a newer tspace wrote it (nothing is changed).
     """
     try:
         store = ox.Store(str(path))
@@ -53,7 +58,11 @@ def open_store(data_dir: Path, path: Path) -> ox.Store:
                 f"data directory {path.parent} is in use by another store process"
             ) from None
         raise
-    marks = list(store.quads_for_pattern(db_layout.STORE, db_layout.FORMAT_P, None, db_layout.META))
+    try:
+        marks = format_marks(store, data_dir)
+    except NewerDataDir:
+        del store  # let go of the directory: the caller may open it read-only
+        raise
     old = data_dir / OLD_FILE
     if not marks and old.exists():
         _migrate(old, store)
@@ -69,6 +78,22 @@ def open_store(data_dir: Path, path: Path) -> ox.Store:
         )
         store.flush()
     return store
+
+
+def format_marks(store: ox.Store, data_dir: Path) -> list[ox.Quad]:
+    """Return the format marker(s) of a store (none: new, or SQLite's to migrate).
+
+    Raises:
+        NewerDataDir: a newer tspace wrote it.
+    """
+    marks = list(store.quads_for_pattern(db_layout.STORE, db_layout.FORMAT_P, None, db_layout.META))
+    newer = {q.object.value for q in marks} - {"2", db_layout.FORMAT}
+    if newer:
+        raise NewerDataDir(
+            f"data directory {data_dir} is in store format {', '.join(sorted(newer))}, newer "
+            f"than this tspace's ({db_layout.FORMAT}): serve it with the tspace that wrote it"
+        )
+    return marks
 
 
 _N2, _REQUEST2 = (ox.NamedNode(db_layout.ROOT + x) for x in ("n", "request"))
