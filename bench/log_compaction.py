@@ -11,7 +11,7 @@ time and the wall clock, in ms.
 With `--old TREE` the same runs with the code of TREE (its own process),
 interleaved with this code's.
 
-    .venv/bin/python bench/log_compaction.py [--runs 3] [--keep 100000] [--old TREE]
+    .venv/bin/python bench/log_compaction.py [--runs 3] [--keep 100000] [--old TREE] [--json]
 """
 
 from __future__ import annotations
@@ -24,7 +24,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from _harness import code_env, median, print_table
+from _harness import code_env, median
+from _output import bench_parser, parse, print_table
 
 
 def compactions(keep: int) -> dict[str, float]:
@@ -66,12 +67,12 @@ def _child(tree: Path | None, keep: int) -> dict[str, float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--keep", type=int, default=100_000)
     parser.add_argument("--old", type=Path, help="a source tree of the code before")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    args = parse(parser)
     if args.child:
         print(json.dumps(compactions(args.keep)))
         return
