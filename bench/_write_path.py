@@ -9,6 +9,10 @@ Two cases, into a space already holding 100,000 inferred triples:
   write), as the store sees it: the store's share of write -> notification;
 - `200 replaced`: the reasoner's answer when 200 rules fire, 200 inferred values removed and
   200 added (issue 13's "+200 rules all firing"), whole path and `StoreDB.commit` alone;
+- `200 replaced, parts`: the same answer again, 100 times, with a subscriber to its parts
+  in another session (the store then cuts it into 200 parts, one a key, and puts each):
+  the writer thread's CPU in `PartPublisher.publish`, median of the last 50 (its keys come
+  back every time, as those of a reasoner's answer do);
 - `bulk`: 200,000 new triples in changesets of 10,000, as `tspace write` of a big file
   sends them (10 triples a subject, space_bench's document): CPU microseconds a triple of
   the writer thread (decoding and checking, deciding, committing) and of the whole process
@@ -44,6 +48,7 @@ import space.store.db as db_module
 import space.store.writer as writer_module
 from space.changeset import WIRE_VERSION, pack
 from space.store import intake
+from space.store.parts import PartPublisher
 from space.store.publish import Publisher
 from space.store.server import StoreServer
 from space.store.writer import Request, Writer
@@ -68,8 +73,8 @@ def _timed(f: Callable, calls: list[float], clock: Callable = time.perf_counter)
 
 
 def main(rounds: int) -> None:
-    conf = zenoh.Config()
-    conf.insert_json5("scouting/multicast/enabled", "false")
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    conf = make_config(mode="peer", listen=[endpoint])
     commits: list[float] = []
     committing = db_module.StoreDB.commit
     db_module.StoreDB.commit = _timed(committing, commits)  # type: ignore[method-assign]
@@ -127,6 +132,7 @@ def main(rounds: int) -> None:
             "one triple, whole write (us)": _median_us(one[rounds:]),
             "200 replaced, whole write (us)": _median_us(whole[1:]),
             "200 replaced, StoreDB.commit (us)": _median_us(commits[1:]),
+            "200 replaced, parts: PartPublisher.publish (us CPU)": _parts(session, write, endpoint),
         }
         commits.clear()
         decoding: list[float] = []
@@ -162,6 +168,28 @@ def main(rounds: int) -> None:
         db.close()
     figures.update(served(1000))
     print(json.dumps(figures))
+
+
+def _parts(session: zenoh.Session, write: Callable[[dict], float], endpoint: str) -> float:
+    """Return the median CPU microseconds of publishing a 200-part answer (see the module's doc)."""
+    calls: list[float] = []
+    publish = PartPublisher.publish
+    PartPublisher.publish = _timed(publish, calls, time.thread_time)  # type: ignore[method-assign]
+    with zenoh.open(make_config(mode="peer", connect=[endpoint])) as other:
+        subscriber = other.declare_subscriber("tspace/w/@/changes/*/*", lambda _s: None)
+        watcher = session.declare_publisher("tspace/w/@/changes/*/*")
+        deadline = time.monotonic() + 10
+        while not watcher.matching_status.matching and time.monotonic() < deadline:
+            time.sleep(0.01)
+        watcher.undeclare()
+        old: list[list[str]] = []
+        for r in range(100):
+            new = [["<urn:b:base>", f"<urn:b:setting_{k}>", f'"{r}.{k}"'] for k in range(200)]
+            write({"iadd": new, "idel": old})
+            old = new
+        subscriber.undeclare()
+    PartPublisher.publish = publish  # type: ignore[method-assign]
+    return _median_us(calls[-50:])
 
 
 def served(count: int) -> dict[str, float]:

@@ -12,7 +12,7 @@ change when the space learns a prefix later. See docs/wire-format.md.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from functools import lru_cache
 
 from rdflib.term import Node
@@ -38,15 +38,32 @@ def split(wire: Mapping) -> dict[PartKey, Part]:
     Raises:
         MalformedPayload: a listed triple is not three N-Triples terms.
     """
-    header = {name: wire[name] for name in HEADER if name in wire}
-    parts: dict[PartKey, Part] = {}
-    for name in LISTS:
-        for triple in _listed(wire, name):
-            key = chunks(triple)
-            part = parts.get(key)
+    head = header(wire)
+    lists = cut(((name, _listed(wire, name)) for name in LISTS), chunks)
+    return {key: {**head, **listed} for key, listed in lists.items()}
+
+
+def header(wire: Mapping) -> dict:
+    """Return what of a changeset map every one of its parts repeats (`HEADER`)."""
+    return {name: wire[name] for name in HEADER if name in wire}
+
+
+def cut(
+    lists: Iterable[tuple[str, Sequence[Sequence[str]]]],
+    key: Callable[[Sequence[str]], PartKey],
+) -> dict[PartKey, dict[str, list]]:
+    """Return each part's triple lists by its `key`, from a changeset's (name, triples) lists."""
+    parts: dict[PartKey, dict[str, list]] = {}
+    for name, listed in lists:
+        for triple in listed:
+            k = key(triple)
+            part = parts.get(k)
             if part is None:
-                part = parts[key] = dict(header)
-            part.setdefault(name, []).append(triple)
+                parts[k] = {name: [triple]}
+            elif name in part:
+                part[name].append(triple)
+            else:
+                part[name] = [triple]
     return parts
 
 
@@ -93,6 +110,11 @@ def _listed(wire: Mapping, name: str) -> list:
     if not isinstance(listed, list):
         raise MalformedPayload(f"'{name}' must be a list of triples")
     return listed
+
+
+def made_chunks(triple: Sequence[str]) -> PartKey:
+    """Return the key chunks of a triple the store made (its texts are N-Triples: not checked)."""
+    return _chunk(triple[0]), _chunk(triple[1])
 
 
 def chunks(triple: object) -> PartKey:

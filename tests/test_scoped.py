@@ -14,7 +14,11 @@ from rdflib.namespace import RDF
 
 from conftest import AC_NS, Server, wait_for
 from space import InputError, TripleSpace, escape_key_chunk, make_config
-from space.changeset import pack
+from space._parts import term_chunk
+from space.changeset import pack, unpack
+from space.keys import part_key
+from space.store.parts import OFTEN
+from space.terms import to_nt
 
 AC = Namespace(AC_NS)
 SCOPE = [(AC.robot1, None), ("ac:robot1_*", None)]
@@ -142,6 +146,25 @@ def test_a_part_key_does_not_change_when_the_space_learns_a_prefix(server, space
         ts.write([(AC.robot1_base, AC.motion_speed, Literal("low"))])
         wait_for(lambda: seen, what="the part keyed with the longer namespace")
         assert seen[0].added == [(AC.robot1_base, AC.motion_speed, Literal("low"))]
+
+
+def test_a_key_written_often_keeps_every_part_in_order(ts, space_name):
+    """Past `OFTEN` puts the store puts a key's parts on a declared publisher: none is lost."""
+    key = part_key(space_name, *(term_chunk(t) for t in level(1, "x")[:2]))
+    heard: list[bytes] = []
+    raw = ts.session.declare_subscriber(key, lambda sample: heard.append(sample.payload))
+    seen = []
+    ts.subscribe(None, seen.append, scope=SCOPE)
+    values = [str(i) for i in range(OFTEN + 8)]
+    for value in values:
+        ts.write([level(1, value), level(2, value)])
+    wait_for(lambda: len(seen) >= len(values), what="robot1's every level")
+    assert [c.added for c in seen] == [[level(1, v)] for v in values]
+    wait_for(lambda: len(heard) >= len(values), what="every part on robot1's key")
+    parts = [unpack(bytes(payload)) for payload in heard]
+    assert [p["add"] for p in parts] == [[[to_nt(t) for t in level(1, v)]] for v in values]
+    assert [p["prev"] for p in parts[1:]] == [p["seq"] for p in parts[:-1]]
+    raw.undeclare()
 
 
 def test_a_scoped_subscription_may_start_from_the_whole_state(ts):

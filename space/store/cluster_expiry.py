@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import msgpack
 
+from space._parts import header
 from space.changeset import WIRE_VERSION, hlc_key, pack, unpack
 from space.lifespan import EXPIRY_AGENT
 from space.store import oxterms
@@ -120,7 +121,7 @@ class ClusterExpiry:
             if write.lifespan:
                 wire["lifespan"] = write.lifespan
             entry = Entry(space=state.name, seq=state.seq + 1, request=write.id, payload=b"")
-            net = Net(entry, [[], [], [], []])
+            net = Net(entry, [[], [], [], []], header(wire))
         else:
             wire = unpack(net.entry.payload)  # type: ignore[assignment]
         wire["held"] = [oxterms.triple_text(t) for t in plan.held]

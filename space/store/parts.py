@@ -18,17 +18,19 @@ from __future__ import annotations
 
 import logging
 
+import msgpack
 import zenoh
 
 from space import keys
-from space._parts import BURST, end, split
-from space.changeset import pack, unpack
-from space.errors import MalformedPayload
+from space._parts import BURST, cut, end, made_chunks
+from space.changeset import LISTS, pack
 from space.store.state import Net, SpaceState
 
 log = logging.getLogger("tspace.store")
 
 MAX_KEYS = 200_000  # last seqs remembered per space; the oldest half is forgotten beyond
+OFTEN = 32  # puts on a key before it gets a declared publisher
+MAX_OFTEN = 4096  # keys whose puts are counted; the least recently put half is forgotten beyond
 MAX_KEY = 60_000  # bytes: a longer key is not published (Zenoh refuses ~64 KiB keys)
 
 
@@ -42,12 +44,15 @@ class PartPublisher:
         self._floor: dict[str, int] = {}
         self._watchers: dict[str, zenoh.Publisher] = {}
         self._ends: dict[str, zenoh.Publisher] = {}
+        self._often = _Often(session)
+        self._packer = msgpack.Packer(use_bin_type=True)  # as `space.changeset.pack`, made once
 
     def close(self) -> None:
         """Undeclare the publishers of ends and those used to learn whether anyone selects parts."""
         for publisher in [*self._watchers.values(), *self._ends.values()]:
             publisher.undeclare()
         self._watchers, self._ends = {}, {}
+        self._often.close()
 
     def publish(self, state: SpaceState, net: Net) -> None:
         """Publish the parts of one net changeset, if anyone selects parts of its space.
@@ -74,12 +79,8 @@ class PartPublisher:
             return
         last = self._last.setdefault(space, {})
         floor = self._floor.setdefault(space, seq - 1)
-        try:
-            parts = split(unpack(net.entry.payload))  # type: ignore[arg-type]
-        except MalformedPayload as exc:  # the store made it: a bug, but parts are an extra
-            log.error("changeset %d of %r not cut into parts: %s", seq, space, exc)
-            return
-        block = zenoh.CongestionControl.BLOCK
+        parts = cut(zip(LISTS, net.texts, strict=True), made_chunks)
+        head = self._packer.pack(net.header)[1:]  # its pairs, packed once for every part
         for (s, p), part in parts.items():
             key = keys.part_key(space, s, p, self.root)
             prev = last.pop(key, floor)
@@ -87,11 +88,21 @@ class PartPublisher:
             if send and len(key) <= MAX_KEY:
                 part["prev"] = prev
                 part["n"] = len(parts)
-                self.session.put(key, pack(part), congestion_control=block)
+                self._often.put(key, self._map(head, len(net.header), part))
         if send and len(parts) >= BURST:
             self._end(space).put(pack(end(seq, parts)))
         if len(last) > MAX_KEYS:
             self._forget(space, last)
+
+    def _map(self, head: bytes, count: int, rest: dict) -> bytes:
+        """Return the msgpack map of `count` packed pairs `head` followed by those of `rest`.
+
+        What `pack` makes of the two maps merged, byte for byte: a part's header is
+        packed once for all the parts of its changeset. Both are fixmaps (a header
+        of at most 7 pairs, a part's 4 lists, `prev` and `n`: under 16 in all).
+        """
+        body = self._packer.pack(rest)
+        return bytes((0x80 | (count + len(rest)),)) + head + body[1:]
 
     def _end(self, space: str) -> zenoh.Publisher:
         """Return the publisher of a space's ends, declared on first use (as its parts: BLOCK)."""
@@ -114,3 +125,44 @@ class PartPublisher:
             key = keys.part_key(space, "*", "*", self.root)
             publisher = self._watchers[space] = self.session.declare_publisher(key)
         return publisher.matching_status.matching
+
+
+class _Often:
+    """Put parts, on a declared publisher for a key put `OFTEN` times (the last `MAX_OFTEN` keys).
+
+    A put on a declared publisher costs half a put on the session (~1 us less), but
+    declaring one costs ~80: a key that comes back (a robot's, the reasoner's answer's)
+    earns one, a bulk write's keys (seen once) do not.
+    """
+
+    def __init__(self, session: zenoh.Session) -> None:
+        self.session = session
+        self._keys: dict[str, int | zenoh.Publisher] = {}  # key -> its puts, or its publisher
+
+    def put(self, key: str, payload: bytes) -> None:
+        """Put a part on its key (BLOCK, as every part: none is dropped when a link is slow)."""
+        seen = self._keys.pop(key, 0)  # put back last: the least recently put are forgotten
+        if isinstance(seen, int) and seen + 1 < OFTEN:
+            self._keys[key] = seen + 1
+            self.session.put(key, payload, congestion_control=zenoh.CongestionControl.BLOCK)
+        else:
+            if isinstance(seen, int):
+                seen = self.session.declare_publisher(
+                    key, congestion_control=zenoh.CongestionControl.BLOCK
+                )
+            self._keys[key] = seen
+            seen.put(payload)
+        if len(self._keys) > MAX_OFTEN:
+            old = list(self._keys)[: len(self._keys) // 2]
+            self._undeclare([self._keys.pop(k) for k in old])
+
+    def close(self) -> None:
+        """Undeclare every publisher."""
+        self._undeclare(list(self._keys.values()))
+        self._keys = {}
+
+    @staticmethod
+    def _undeclare(seen: list[int | zenoh.Publisher]) -> None:
+        for publisher in seen:
+            if not isinstance(publisher, int):
+                publisher.undeclare()

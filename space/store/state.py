@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import pyoxigraph as ox
 
+from space._parts import header
 from space.changeset import WIRE_VERSION, hlc_key, pack, published_seq
 from space.prefixes import PrefixMap
 from space.store import oxterms
@@ -34,6 +35,7 @@ class Net:
 
     entry: Entry
     texts: list[list[list[str]]]  # N-Triples of add, del, iadd, idel (for triple keys)
+    header: dict  # what each of its parts repeats (`space._parts.header`): parts are cut from texts
 
 
 class SpaceState:
@@ -148,7 +150,7 @@ class SpaceState:
                 wire[name] = listed
         entry.payload = pack(wire)
         self.seq = entry.seq
-        return Net(entry, texts)
+        return Net(entry, texts, header(wire))
 
     def _decide_plain(self, req: WriteRequest, rows: list, stamp: str) -> Net | None:
         """Decide a write of plain additions on their texts (`oxterms.plain_rows`).
@@ -223,7 +225,7 @@ class SpaceState:
         self._stamp(entry, str(wire.get("ts") or ""))
         self.seq = seq
         texts = [[oxterms.triple_text(t) for t in ts] for ts in lists]
-        return Net(entry, texts)
+        return Net(entry, texts, header(wire))
 
     def _stamp(self, entry: Entry, stamp: str) -> None:
         """Record the timestamps of functional values the entry adds or removes."""
