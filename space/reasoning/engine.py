@@ -84,6 +84,7 @@ class RuleEngine(EngineReads):
         with collector_paused():  # what it makes lives as long as the engine
             self._compiled = [index.add(self.terms, env, r, i) for i, r in enumerate(everything)]
             index.share(self._store.triples)
+            index.gate(self._store.pos, self.terms.id(OWL.sameAs))
         self._index = index
         # Backward rules with noValue: their conclusions go when no match holds (as Jena's).
         held = [c.order for c in self._compiled if c.rule.backward and withdrawable(c)]
