@@ -68,10 +68,10 @@ class RuleIndex:
         self.anywhere: list[Entry] = []
         self._removal_by_p: dict[int, list[Entry]] = {}
         self._removal_anywhere: list[Entry] = []
-        # Memos of `starts`: [0] with every `anywhere` join, [1] without the gated ones.
+        # Memos of `starts`: [0] without the gated `anywhere` joins, [1] with them.
         self._starts: tuple[Memo, Memo] = ({}, {})
         self._starts_by_p: tuple[dict[int, tuple[Entry, ...]], ...] = ({}, {})
-        self._ungated: list[Entry] = []  # `anywhere` but the joins `gate` holds back
+        self._ungated: list[Entry] = self.anywhere  # but the joins `gate` holds back
         self._gate: int | None = None  # the predicate id (owl:sameAs) they need stored
         self._pos: Index = {}  # the store's POS index, where `starts` looks for it
         self._candidates: list[Candidate] = []  # joins that may share a prefix (`share`)
@@ -85,15 +85,15 @@ class RuleIndex:
         Without the gated joins while their predicate has no triple: each of them
         would find nothing then, so the joins that run, and their order, are the same.
         """
-        closed = self._gate is not None and self._gate not in self._pos
-        memo = self._starts[closed]
+        opened = self._gate in self._pos  # None (nothing gated) never is
+        memo = self._starts[opened]
         found = memo.get((p, o))
         if found is not None:
             return found
-        by_p = self._starts_by_p[closed]
+        by_p = self._starts_by_p[opened]
         found = by_p.get(p)
         if found is None:
-            anywhere = self._ungated if closed else self.anywhere
+            anywhere = self.anywhere if opened else self._ungated
             found = by_p[p] = (*self.by_p.get(p, ()), *anywhere)
         if (p, o) in self.by_po:
             found = memo[(p, o)] = (*self.by_po[(p, o)], *found)
