@@ -84,6 +84,7 @@ class RuleEngine(EngineReads):
         with collector_paused():  # what it makes lives as long as the engine
             self._compiled = [index.add(self.terms, env, r, i) for i, r in enumerate(everything)]
             index.share(self._store.triples)
+            index.gate(self._store.pos, self.terms.id(OWL.sameAs))
         self._index = index
         # Backward rules with noValue: their conclusions go when no match holds (as Jena's).
         held = [c.order for c in self._compiled if c.rule.backward and withdrawable(c)]
@@ -248,28 +249,18 @@ class RuleEngine(EngineReads):
             if compiled.start is None:
                 continue
             compiled.start(0, 0, 0, out)
-            for match in out:
-                if compiled.production:
+            if compiled.production:
+                for match in out:
                     self._agenda.push(compiled, match)
-                    continue
-                premises, bindings = match
-                for head in compiled.heads(bindings):
-                    self._support.record(head, compiled.order, premises)
-                    if head not in self._store.triples:
-                        self._log.touch(head)
-                        self._store.add(head)
-                        queue.append(head)
-                for builtin, args in compiled.actions:
-                    builtin.act(self._ctx, args(bindings))
+            else:
+                self._derive(compiled, out, queue)
             out.clear()
         if queue:
             self._propagate(queue)
 
     def _propagate(self, queue: list[T]) -> None:
         """Run the joins each new triple starts until nothing new is derived."""
-        store, triples, support, ctx = self._store, self._store.triples, self._support, self._ctx
-        touch, agenda = self._log.touch, self._agenda
-        starts = self._index.starts
+        agenda, starts = self._agenda, self._index.starts
         out: list[Match] = []
         position = 0
         while position < len(queue):
@@ -288,16 +279,26 @@ class RuleEngine(EngineReads):
                         for match in out:
                             agenda.push(compiled, match)
                 else:
-                    for premises, bindings in out:
-                        for head in compiled.heads(bindings):
-                            support.record(head, compiled.order, premises)
-                            if head not in triples:
-                                touch(head)
-                                store.add(head)
-                                queue.append(head)
-                        for builtin, args in compiled.actions:
-                            builtin.act(ctx, args(bindings))
+                    self._derive(compiled, out, queue)
                 out.clear()
+
+    def _derive(self, compiled: CompiledRule, matches: list[Match], queue: list[T]) -> None:
+        """Record what a monotonic rule concludes from `matches`; queue the heads new to the state.
+
+        Apart from `_propagate`, whose production firings (one new triple each) need
+        none of this.
+        """
+        store, triples, support, ctx = self._store, self._store.triples, self._support, self._ctx
+        touch, order = self._log.touch, compiled.order
+        for premises, bindings in matches:
+            for head in compiled.heads(bindings):
+                support.record(head, order, premises)
+                if head not in triples:
+                    touch(head)
+                    store.add(head)
+                    queue.append(head)
+            for builtin, args in compiled.actions:
+                builtin.act(ctx, args(bindings))
 
     def _unassert(self, triples: Iterable[T], *, notify: bool) -> None:
         """Retract asserted triples and what they alone supported.

@@ -76,12 +76,13 @@ class EngineReads:
         if any(i is None and x is not None for i, x in zip(ids, pattern, strict=True)):
             return  # a term the engine never saw: nothing matches
         functors, hidden = self.terms.functors, self.terms.hidden  # as TermTable.shown, inlined
-        for t in self._store.match(*ids):
-            if t[2] in functors or t[0] in functors:
+        names = self.terms.names  # decoded here, not by two calls per triple
+        for s, p, o in self._store.match(*ids):
+            if o in functors or s in functors:
                 continue
-            if hidden and (t[0] in hidden or t[1] in hidden or t[2] in hidden):
+            if hidden and (s in hidden or p in hidden or o in hidden):
                 continue
-            yield self._decode(t)
+            yield (names[s], names[p], names[o])
 
     def __contains__(self, triple: object) -> bool:
         ids = tuple(self.terms.find(x) for x in triple) if isinstance(triple, tuple) else ()
