@@ -317,5 +317,5 @@ def test_a_retry_on_another_replica_is_told_what_its_first_outcome_dropped(
         first = a.send(stale)
         assert [d.reason for d in first.dropped] and "newer value" in first.dropped[0].reason
         again = c.send(stale)
-        assert again.again and again.seq == first.seq
+        assert again.again and again.seq == first.seq, (again, first.seq)
         assert [d.reason for d in again.dropped] == [d.reason for d in first.dropped]
