@@ -103,6 +103,18 @@ def test_sigterm_stops_every_process(tmp_path, launch):
         assert [p for p in processes if alive(p)] == []
 
 
+def test_ctrl_c_pressed_again_and_again_still_stops_every_process(tmp_path, launch):
+    """An impatient operator: every interrupt after the first lands while up is stopping
+    (the handler once took a lock the interrupted loop could hold, and up hung for good)."""
+    with Up(tmp_path, launch) as up:
+        up.wait_started()
+        processes = up.track()
+        for _ in range(20):
+            up.proc.send_signal(signal.SIGINT)
+        assert up.proc.wait(timeout=15) == 0, up.logs()
+        assert [p for p in processes if alive(p)] == []
+
+
 def test_a_killed_up_takes_its_processes_with_it(tmp_path, launch):
     with Up(tmp_path, launch) as up:
         up.wait_started()

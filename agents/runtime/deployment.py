@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import signal
 import sys
-import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -85,7 +84,10 @@ class Deployment:
         self.launch = launch
         self.view = view
         self.connect = client_endpoint(options.listen[0])
-        self.stop_requested = threading.Event()
+        # Set by the signal handler, read by the loops every TICK: a plain flag, since a
+        # handler that takes a lock (Event.set) deadlocks when a second Ctrl-C lands
+        # while the first one holds it, or while the loop's own wait holds it.
+        self.stop_requested = False
         self.supervisor = Supervisor(
             log_dir=options.data / "logs",
             on_event=view.event,
@@ -200,13 +202,13 @@ class Deployment:
                 signal.signal(sig, handler)
 
     def _on_signal(self, signum: int, frame: FrameType | None) -> None:
-        self.stop_requested.set()
+        self.stop_requested = True
 
     def _wait_for_store(self) -> TripleSpace | None:
         """Return a handle once the store answers; None if stopped or it never does."""
         deadline = time.monotonic() + STORE_STARTUP
         ts: TripleSpace | None = None
-        while not self.stop_requested.is_set():
+        while not self.stop_requested:
             self.supervisor.poll()
             try:
                 if ts is None:
@@ -223,7 +225,7 @@ class Deployment:
                     log = self.supervisor.log_path("serve")
                     self.view.event(f"no store after {STORE_STARTUP:.0f} s ({exc}); see {log}")
                     break
-            self.stop_requested.wait(TICK)
+            time.sleep(TICK)
         if ts is not None:
             ts.close()
         return None
@@ -266,7 +268,7 @@ class Deployment:
         self.cluster = ClusterWatch(ts.session)
         told = ""
         shown, shown_at = -1, 0.0
-        while not self.stop_requested.is_set():
+        while not self.stop_requested:
             self.supervisor.poll()
             if self.cluster.line() != told:
                 told = self.cluster.line()
@@ -281,7 +283,7 @@ class Deployment:
             if self.mirror.version != shown or time.monotonic() - shown_at > 1.0:
                 shown, shown_at = self.mirror.version, time.monotonic()
                 self._show()
-            self.stop_requested.wait(TICK)
+            time.sleep(TICK)
         if options.once:
             print("tspace up: stopped before the scenario completed", file=sys.stderr)
             return 1
