@@ -40,6 +40,7 @@ staying this tree's; `--json` prints one JSON object per line per case
 from __future__ import annotations
 
 import json
+import os
 import queue
 import subprocess
 import sys
@@ -112,9 +113,20 @@ def agent_commands(
     }
 
 
+def cpu_seconds(pid: int) -> float:
+    """Return the CPU time (user + system, s) process `pid` has used so far."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 @contextmanager
-def agents(commands: dict[str, list[str]], logs: Path, code: Path | None = None) -> Iterator[None]:
-    """Run the agent processes (stderr to `logs/NAME.log`), from `code` if given; stop them."""
+def agents(
+    commands: dict[str, list[str]], logs: Path, code: Path | None = None
+) -> Iterator[dict[str, int]]:
+    """Run the agent processes (stderr to `logs/NAME.log`), from `code` if given; stop them.
+
+    Yields each agent's pid by name.
+    """
     procs: list[subprocess.Popen[bytes]] = []
     try:
         for name, argv in commands.items():
@@ -127,7 +139,7 @@ def agents(commands: dict[str, list[str]], logs: Path, code: Path | None = None)
                         env=code_env(code),
                     )
                 )
-        yield
+        yield {name: proc.pid for name, proc in zip(commands, procs, strict=True)}
     finally:
         for proc in procs:
             proc.terminate()
@@ -257,6 +269,7 @@ class Observer:
 
     def __init__(self, session: zenoh.Session) -> None:
         self.writers: set[str] = set()
+        self.written: dict[str, int] = {}  # changesets published, by writer
         self.state: dict[tuple[str, str], set[str]] = {}  # (s, p) -> objects
         self.seq = 0
         self._raw: queue.SimpleQueue[tuple[float, bytes]] = queue.SimpleQueue()
@@ -326,7 +339,9 @@ class Observer:
             run.feed(wire, arrival)
 
     def _apply(self, wire: dict) -> None:
-        self.writers.add(wire.get("agent") or "")
+        agent = wire.get("agent") or ""
+        self.writers.add(agent)
+        self.written[agent] = self.written.get(agent, 0) + 1
         for s, p, o in wire.get("del") or ():
             self.state.get((s, p), set()).discard(o)
         for s, p, o in wire.get("add") or ():
@@ -364,8 +379,11 @@ def measure(
     logs: Path,
     secure: Path | None = None,
     code: Path | None = None,
-) -> list[dict[str, float]]:
-    """Run the robot's processes and time `runs` very low batteries; return their latencies.
+) -> tuple[list[dict[str, float]], dict[str, float]]:
+    """Run the robot's processes and time `runs` very low batteries.
+
+    Returns their latencies, and the CPU milliseconds each process used per run (a
+    run being the very low battery and its undoing).
 
     With `secure` (a `tspace certs` directory), every process speaks mTLS as itself
     and the bench as the operator. `code`: the source tree the store and the
@@ -378,18 +396,21 @@ def measure(
     settings = rule_set.settings
     identity = load_identity(secure, "operator") if secure else None
     with (
-        serve_process(code, secure=secure) as (endpoint, _pid),
+        serve_process(code, secure=secure) as (endpoint, serve_pid),
         TripleSpace.open(endpoint, space=SPACE, agent="bench", identity=identity) as ts,
     ):
         ts.write(stage(rule_set))
         observer = Observer(ts.session)
         observer.load(ts)
-        with agents(agent_commands(endpoint, rules, secure), logs, code):
+        with agents(agent_commands(endpoint, rules, secure), logs, code) as pids:
             observer.until(
                 lambda: {"reasoner", HW, NAV, BEHAVIOR} <= observer.writers and observer.at_rest(),
                 "start of the agents",
             )
             observer.settle()
+            pids = {"serve": serve_pid, **pids}
+            before = {name: cpu_seconds(pid) for name, pid in pids.items()}
+            published = sum(observer.written.values())
             results = []
             for _ in range(runs):
                 run = Run()
@@ -411,8 +432,12 @@ def measure(
                 )
                 observer.until(observer.at_rest, "robot back at rest")
                 observer.settle()  # what answers the reset (the reasoner's, the agents') is over
+            cpu = {
+                name: (cpu_seconds(pid) - before[name]) * 1e3 / runs for name, pid in pids.items()
+            }
+            cpu["changesets"] = (sum(observer.written.values()) - published) / runs
         observer.close()
-    return results
+    return results, cpu
 
 
 Results = dict[tuple[str, RuleSet], list[dict[str, float]]]  # (tree, rule set) -> runs
@@ -503,13 +528,16 @@ def main(
     if old is not None:
         trees.insert(0, ("old", old.resolve()))
     all_results: Results = {}
+    cpu_use: dict[tuple[str, RuleSet], dict[str, float]] = {}
     with tempfile.TemporaryDirectory(prefix="tspace-e2e-") as tmp:
         for index, rule_set in enumerate(rule_sets):
             for tree, code in trees:  # in turn: a slow spell of a shared machine hits both
                 logs = Path(tmp) / f"{index}-{tree}"
                 logs.mkdir()
                 label = tree if old is not None else ""
-                all_results[(label, rule_set)] = measure(runs, rule_set, logs, code=code)
+                all_results[(label, rule_set)], cpu_use[(label, rule_set)] = measure(
+                    runs, rule_set, logs, code=code
+                )
     print_table(
         '"battery very low" written by hw_monitor -> acts of behaviour, nav and hw committed '
         f"and published (ms; {runs} runs; p50 = median over runs; paper: Jena, ms per update)",
@@ -530,6 +558,21 @@ def main(
             "paper (ms)",
         ],
         [summary(tree, rule_set, results) for (tree, rule_set), results in all_results.items()],
+    )
+    processes = ["serve", *agent_commands("", [])]
+    print_table(
+        "CPU per run, by process (ms; a run = the very low battery and its undoing; "
+        "2 cores = 2 ms of CPU per ms)",
+        ["case", *(f"{name} (ms)" for name in processes), "all (ms)", "changesets"],
+        [
+            [
+                case(tree, rule_set),
+                *(cpu[name] for name in processes),
+                sum(cpu[name] for name in processes),
+                cpu["changesets"],
+            ]
+            for (tree, rule_set), cpu in cpu_use.items()
+        ],
     )
     if as_lines:
         for (tree, rule_set), results in all_results.items():
