@@ -40,7 +40,6 @@ staying this tree's; `--json` prints one JSON object per line per case
 from __future__ import annotations
 
 import json
-import os
 import queue
 import subprocess
 import sys
@@ -53,7 +52,7 @@ from pathlib import Path
 
 import msgpack
 import zenoh
-from _harness import code_env, median, percentile, serve_process
+from _harness import code_env, cpu_seconds, median, percentile, serve_process
 from _output import bench_parser, parse, png, print_table
 from rdflib import Graph, Literal, Namespace, URIRef
 from rules_scaling import PAPER, paper_rules
@@ -111,12 +110,6 @@ def agent_commands(
         "nav_monitor": ["agents.nav_monitor", *common, "--time-scale", "0.001"],
         "behavior": ["agents.behavior", *common],
     }
-
-
-def cpu_seconds(pid: int) -> float:
-    """Return the CPU time (user + system, s) process `pid` has used so far."""
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 @contextmanager
@@ -409,7 +402,7 @@ def measure(
             )
             observer.settle()
             pids = {"serve": serve_pid, **pids}
-            before = {name: cpu_seconds(pid) for name, pid in pids.items()}
+            before = {name: cpu_seconds([pid]) for name, pid in pids.items()}
             published = sum(observer.written.values())
             results = []
             for _ in range(runs):
@@ -433,7 +426,7 @@ def measure(
                 observer.until(observer.at_rest, "robot back at rest")
                 observer.settle()  # what answers the reset (the reasoner's, the agents') is over
             cpu = {
-                name: (cpu_seconds(pid) - before[name]) * 1e3 / runs for name, pid in pids.items()
+                name: (cpu_seconds([pid]) - before[name]) * 1e3 / runs for name, pid in pids.items()
             }
             cpu["changesets"] = (sum(observer.written.values()) - published) / runs
         observer.close()
