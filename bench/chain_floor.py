@@ -1,0 +1,205 @@
+"""The floor under end_to_end.py: its three hops through the store, with agents doing nothing.
+
+end_to_end.py's path is three changesets in a row, each committed and published by
+the store before the next process reacts: the hw_monitor's "very low" -> the
+reasoner's answer -> an agent's act. This bench keeps that shape and takes away
+everything but the space: the bench writes stage 1 (the start, like the
+hw_monitor), relay B writes stage 2 when it sees stage 1 (the reasoner's place),
+relay C writes stage 3 when it sees stage 2 (an acting agent's place), and the
+bench's plain Zenoh subscriber on `@/changes` stamps stage 3's arrival (as
+end_to_end.py stamps an act). The relays are `TripleSpace` clients doing what an
+agent's library does (a subscription, a write on a declared querier) and no work
+of their own. What this takes is the least any robot's rules could take on this
+machine with this design.
+
+Cases (milliseconds from the start's HLC time to stage 3 published, p50/p99):
+
+- `zenoh`: no store: three plain Zenoh puts through a router, each relay putting
+  the next from its subscriber's callback: the network's floor;
+- `store`: the three hops through `tspace serve`;
+- `store + N bystanders`: the same with N more clients subscribed to the space
+  that decode every change and do nothing, as end_to_end.py's other agents
+  (default 2: five client processes, as there).
+
+Run: python bench/chain_floor.py [--runs 200] [--bystanders 2] [--json] [--no-plot].
+"""
+
+from __future__ import annotations
+
+import argparse
+import queue
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import msgpack
+import zenoh
+from _harness import free_port, median, percentile, serve_process
+from _output import bench_parser, parse, print_table
+from rdflib import Literal, URIRef
+
+from space import TripleSpace
+from space.changeset import hlc_key
+from space.terms import to_nt
+
+SPACE = "chain"
+S, STAGE = URIRef("urn:chain:s"), URIRef("urn:chain:stage")
+STAGE_NT = to_nt(STAGE)
+
+
+def relay(endpoint: str, role: str) -> None:
+    """Run one relay: on stage n-1 write stage n (`role` "2" or "3"), or watch (`"0"`)."""
+    step = int(role)
+    with TripleSpace.open(endpoint, space=SPACE, agent=f"relay{role}") as ts:
+
+        def on_change(change: object) -> None:
+            if step == 0:
+                return
+            for _s, _p, o in change.added:  # type: ignore[attr-defined]
+                if int(o) == step - 1:
+                    ts.send_later(ts.changeset([(S, STAGE, Literal(step))], [(S, STAGE, o)]))
+
+        ts.subscribe((S, STAGE, None), on_change)
+        print("ready", flush=True)
+        sys.stdin.read()  # until the bench closes our stdin
+
+
+def zenoh_relay(endpoint: str, role: str) -> None:
+    """Run one plain-Zenoh relay: put `chain/<role>` from the callback of `chain/<role - 1>`."""
+    config = zenoh.Config()
+    config.insert_json5("mode", '"client"')
+    config.insert_json5("connect/endpoints", f'["{endpoint}"]')
+    session = zenoh.open(config)
+    publisher = session.declare_publisher(f"chain/{role}")
+    subscriber = session.declare_subscriber(
+        f"chain/{int(role) - 1}", lambda sample: publisher.put(sample.payload.to_bytes())
+    )
+    print("ready", flush=True)
+    sys.stdin.read()
+    subscriber.undeclare()
+    publisher.undeclare()
+    session.close()
+
+
+@contextmanager
+def relays(endpoint: str, roles: list[str], plain: bool = False) -> Iterator[None]:
+    """Run one relay process per role; stop them (their stdin closed) after."""
+    mode = "--zenoh-relay" if plain else "--relay"
+    procs = [
+        subprocess.Popen(
+            [sys.executable, __file__, mode, role, "--connect", endpoint],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+        )
+        for role in roles
+    ]
+    try:
+        for proc in procs:
+            assert proc.stdout is not None
+            if proc.stdout.readline().strip() != b"ready":
+                raise SystemExit("chain_floor: a relay did not start")
+        yield
+    finally:
+        for proc in procs:
+            assert proc.stdin is not None
+            proc.stdin.close()
+        for proc in procs:
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+
+
+def store_chain(runs: int, bystanders: int) -> list[float]:
+    """Time `runs` chains through `tspace serve`; return ms from start to stage 3 published."""
+    arrivals: queue.SimpleQueue[tuple[float, bytes]] = queue.SimpleQueue()
+    with (
+        serve_process() as (endpoint, _pid),
+        TripleSpace.open(endpoint, space=SPACE, agent="bench") as ts,
+        relays(endpoint, ["2", "3", *["0"] * bystanders]),
+    ):
+        sub = ts.session.declare_subscriber(
+            f"tspace/{SPACE}/@/changes",
+            lambda sample: arrivals.put((time.time(), sample.payload.to_bytes())),
+        )
+        try:
+            results = []
+            for run in range(runs + 5):  # the first five warm up
+                ts.apply([(S, STAGE, Literal(1))], [(S, STAGE, Literal(3))] if run else [])
+                start = None
+                while True:
+                    arrival, payload = arrivals.get(timeout=30)
+                    wire = msgpack.unpackb(payload)
+                    added = wire.get("add") or ()
+                    if any(p == STAGE_NT and o.startswith('"1"') for _, p, o in added):
+                        start = hlc_key(wire["ts"])[0] / 2**32
+                    if start and any(p == STAGE_NT and o.startswith('"3"') for _, p, o in added):
+                        break
+                if run >= 5:
+                    results.append((arrival - start) * 1e3)
+                time.sleep(0.02)  # the relays' acks are in: runs do not overlap
+            return results
+        finally:
+            sub.undeclare()
+
+
+def zenoh_chain(runs: int) -> list[float]:
+    """Time `runs` chains of three plain Zenoh puts through a router (ms)."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    config = zenoh.Config()
+    config.insert_json5("mode", '"router"')
+    config.insert_json5("listen/endpoints", f'["{endpoint}"]')
+    config.insert_json5("scouting/multicast/enabled", "false")
+    arrivals: queue.SimpleQueue[float] = queue.SimpleQueue()
+    with zenoh.open(config) as router, relays(endpoint, ["2", "3"], plain=True):
+        client_config = zenoh.Config()
+        client_config.insert_json5("mode", '"client"')
+        client_config.insert_json5("connect/endpoints", f'["{endpoint}"]')
+        with zenoh.open(client_config) as session:
+            sub = session.declare_subscriber("chain/3", lambda _sample: arrivals.put(time.time()))
+            publisher = session.declare_publisher("chain/1")
+            time.sleep(0.5)  # the relays' subscriptions have reached the router
+            results = []
+            for run in range(runs + 5):
+                start = time.time()
+                publisher.put(b"x" * 200)
+                arrival = arrivals.get(timeout=30)
+                if run >= 5:
+                    results.append((arrival - start) * 1e3)
+                time.sleep(0.02)
+            publisher.undeclare()
+            sub.undeclare()
+        del router
+    return results
+
+
+def main() -> None:
+    parser = bench_parser(__doc__)
+    parser.add_argument("--runs", type=int, default=200, help="chains per case")
+    parser.add_argument("--bystanders", type=int, default=2, help="idle subscribers beside")
+    parser.add_argument("--relay", help=argparse.SUPPRESS)
+    parser.add_argument("--zenoh-relay", help=argparse.SUPPRESS)
+    parser.add_argument("--connect", help=argparse.SUPPRESS)
+    args = parse(parser)
+    if args.relay is not None:
+        return relay(args.connect, args.relay)
+    if args.zenoh_relay is not None:
+        return zenoh_relay(args.connect, args.zenoh_relay)
+    cases = {
+        "zenoh, 3 puts through a router": zenoh_chain(args.runs),
+        "store, 3 hops": store_chain(args.runs, 0),
+        f"store, 3 hops + {args.bystanders} bystanders": store_chain(args.runs, args.bystanders),
+    }
+    title = f"start -> stage 3 published (ms; {args.runs} chains a case)"
+    header = ["case", "runs", "p50 (ms)", "p90 (ms)", "p99 (ms)"]
+    rows = [
+        [name, len(v), median(v), percentile(v, 90), percentile(v, 99)] for name, v in cases.items()
+    ]
+    print_table(title, header, rows)
+
+
+if __name__ == "__main__":
+    main()
