@@ -50,15 +50,25 @@ class Decision:
     request: str = ""  # the writer's request id: committed once, whichever replica decides
 
 
-def logged_payload(payload: bytes, dropped: bytes) -> bytes:
-    """Return the payload etcd logs for a changeset: with what its writer was told was not
-    applied, if anything (`DROPPED`), so that every replica's log tells a retry the same."""
-    if not dropped:
-        return payload
-    return msgpack.packb({**msgpack.unpackb(payload), DROPPED: msgpack.unpackb(dropped)})
+def logged_payload(payload: bytes, dropped: bytes, origin: str) -> bytes:
+    """Return the payload etcd logs for a changeset: with the writer that decided it
+    (`ORIGIN`), and what its writer was told was not applied, if anything (`DROPPED`).
+
+    A replica answers the entries it finds its own payloads in (`cluster_apply`); a
+    retry decided alike on two replicas, on the same state, is the same changeset, and
+    only its origin tells the replica whose entry etcd logged first from the other one.
+    What was dropped is logged so that every replica's log tells a retry the same.
+    """
+    wire = msgpack.unpackb(payload)
+    wire[ORIGIN] = origin
+    if dropped:
+        wire[DROPPED] = msgpack.unpackb(dropped)
+    return msgpack.packb(wire)
 
 
-DROPPED = "dropped"  # the key of a logged payload that `ClusterSpace.install_at` takes out
+# The keys of a logged payload that `ClusterSpace.install_at` takes out.
+DROPPED = "dropped"
+ORIGIN = "by"
 
 
 def line(t: Text) -> str:
