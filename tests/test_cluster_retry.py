@@ -166,3 +166,5 @@ def test_a_retry_decided_alike_on_another_replica_is_answered_again(etcd_cluster
         c.run_until(lambda: again() is not None)
         assert again() == {"id": "robot 7/level #1", "seq": 1, "again": True}
         assert c.spaces["retry"].seq == 1  # applied once
+        [(seq, logged)] = c.db.log("retry", 1, 1)  # as subscribers get it: no writer's token
+        assert seq == 1 and set(unpack(logged)) == {*unpack(cs), "seq"}  # type: ignore[misc]

@@ -54,9 +54,10 @@ def logged_payload(payload: bytes, dropped: bytes, origin: str) -> bytes:
     """Return the payload etcd logs for a changeset: with the writer that decided it
     (`ORIGIN`), and what its writer was told was not applied, if anything (`DROPPED`).
 
-    A replica answers the entries it finds its own payloads in (`cluster_apply`); a
-    retry decided alike on two replicas, on the same state, is the same changeset, and
-    only its origin tells the replica whose entry etcd logged first from the other one.
+    A replica answers its writers as it applies the entries whose payloads are its own
+    flights' (`cluster_apply`). A retry decided on two replicas on the same state is the
+    same changeset: only its origin keeps the replica whose entry etcd refused (the
+    request id committed) from taking the other's for its own, and answering it as new.
     What was dropped is logged so that every replica's log tells a retry the same.
     """
     wire = msgpack.unpackb(payload)
@@ -68,7 +69,7 @@ def logged_payload(payload: bytes, dropped: bytes, origin: str) -> bytes:
 
 # The keys of a logged payload that `ClusterSpace.install_at` takes out.
 DROPPED = "dropped"
-ORIGIN = "by"
+ORIGIN = "origin"
 
 
 def line(t: Text) -> str:
