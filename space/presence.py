@@ -7,6 +7,7 @@ from collections.abc import Callable
 import zenoh
 
 from space import keys
+from space._replies import every_reply
 
 
 def agent_key(space: str, name: str, root: str = keys.ROOT) -> str:
@@ -25,12 +26,15 @@ def declare_agent(session: zenoh.Session, space: str, name: str) -> zenoh.Liveli
 
 
 def alive_agents(session: zenoh.Session, space: str, timeout: float = 2.0) -> list[str]:
-    """Return the names of the agents alive in `space` now."""
-    names = []
-    for reply in session.liveliness().get(agents_key(space), timeout=timeout):
-        if reply.ok is not None:
-            names.append(keys.unescape(str(reply.ok.key_expr).rsplit("/", 1)[1]))
-    return sorted(names)
+    """Return the names of the agents alive in `space` now (a fleet's may be many hundreds).
+
+    Raises:
+        SpaceTimeout: Zenoh did not end the get within `timeout` and a grace (`every_reply`).
+    """
+    replies = every_reply(session.liveliness().get, agents_key(space), timeout)
+    return sorted(
+        keys.unescape(str(r.ok.key_expr).rsplit("/", 1)[1]) for r in replies if r.ok is not None
+    )
 
 
 def watch_agents(

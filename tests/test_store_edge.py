@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import threading
 import uuid
 
 import msgpack
@@ -12,6 +11,7 @@ from rdflib import Literal, Namespace, URIRef
 
 from conftest import AC_NS, Server, wait_for
 from space import ChangesetRejected, TripleSpace
+from space._replies import every_reply
 
 AC = Namespace(AC_NS)
 S, P = f"<{AC_NS}s>", f"<{AC_NS}p>"
@@ -77,9 +77,9 @@ def test_wildcard_gets_are_answered_and_no_fire_and_forget_write_is_lost(ts):
         ts.send_nowait(ts.changeset([(AC.robot, AC.n, Literal(i))]))
         if i % 50 == 0:
             for selector in (f"tspace/{ts.space}/**", "tspace/*/t/**", f"tspace/{ts.space}/*/**"):
-                _get_all(ts.session, selector)
+                every_reply(ts.session.get, selector, 5)
     wait_for(lambda: len(ts.query((AC.robot, AC.n, None))) == 401, 20, "every write")
-    keys = [str(r.ok.key_expr) for r in _get_all(ts.session, f"tspace/{ts.space}/**")]
+    keys = [str(r.ok.key_expr) for r in every_reply(ts.session.get, f"tspace/{ts.space}/**", 5)]
     assert len(keys) == 401 and all(k.startswith(f"tspace/{ts.space}/t/") for k in keys)
 
 
@@ -113,15 +113,3 @@ def test_uri_with_escapes_round_trips(ts):
     iri = URIRef("http://example.org/a%20b/ü")
     ts.write([(iri, AC.p, Literal("x"))])
     assert len(ts.query((iri, None, None))) == 1
-
-
-def _get_all(session: zenoh.Session, selector: str) -> list[zenoh.Reply]:
-    """Return every reply of a wildcard get, each kept as it comes (never a bounded channel:
-    Zenoh's default one holds 256, and a CI run once hung for good in such a get over a store
-    shared by many tests); fail, naming the selector, if the get is not over within 15 s.
-    """
-    replies: list[zenoh.Reply] = []
-    over = threading.Event()
-    session.get(selector, handler=zenoh.handlers.Callback(replies.append, over.set), timeout=5)
-    assert over.wait(15), f"get {selector} not over 10 s after its 5 s timeout"
-    return replies

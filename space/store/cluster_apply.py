@@ -1,8 +1,9 @@
 """Revisions etcd committed, installed into a replica's spaces; ours answered once installed.
 
 Every replica installs every changeset of the log, in log order, whoever wrote
-it; only the changesets this replica decided (its flights, found by payload)
-are acknowledged and published here, the others only noted for the publisher.
+it; only the changesets this replica decided (its flights, found by payload,
+which names the writer that decided it) are acknowledged and published here,
+the others only noted for the publisher.
 Apart from `ClusterWriter` because installing is the same whoever decided, and
 a malformed revision must be skipped, logged, without stopping the replica.
 """

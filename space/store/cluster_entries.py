@@ -50,15 +50,26 @@ class Decision:
     request: str = ""  # the writer's request id: committed once, whichever replica decides
 
 
-def logged_payload(payload: bytes, dropped: bytes) -> bytes:
-    """Return the payload etcd logs for a changeset: with what its writer was told was not
-    applied, if anything (`DROPPED`), so that every replica's log tells a retry the same."""
-    if not dropped:
-        return payload
-    return msgpack.packb({**msgpack.unpackb(payload), DROPPED: msgpack.unpackb(dropped)})
+def logged_payload(payload: bytes, dropped: bytes, origin: str) -> bytes:
+    """Return the payload etcd logs for a changeset: with the writer that decided it
+    (`ORIGIN`), and what its writer was told was not applied, if anything (`DROPPED`).
+
+    A replica answers its writers as it applies the entries whose payloads are its own
+    flights' (`cluster_apply`). A retry decided on two replicas on the same state is the
+    same changeset: only its origin keeps the replica whose entry etcd refused (the
+    request id committed) from taking the other's for its own, and answering it as new.
+    What was dropped is logged so that every replica's log tells a retry the same.
+    """
+    wire = msgpack.unpackb(payload)
+    wire[ORIGIN] = origin
+    if dropped:
+        wire[DROPPED] = msgpack.unpackb(dropped)
+    return msgpack.packb(wire)
 
 
-DROPPED = "dropped"  # the key of a logged payload that `ClusterSpace.install_at` takes out
+# The keys of a logged payload that `ClusterSpace.install_at` takes out.
+DROPPED = "dropped"
+ORIGIN = "origin"
 
 
 def line(t: Text) -> str:

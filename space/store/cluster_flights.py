@@ -55,14 +55,18 @@ def guarded_entry(
     request: str,
     *,
     taken: bool,
+    origin: str,
 ) -> Entry:
-    """Return the log entry of a changeset decided at `revision`, guarded by what it read."""
+    """Return the log entry of a changeset decided at `revision`, guarded by what it read.
+
+    `origin` names the writer that decided it (`logged_payload`).
+    """
     functional = frozenset(oxterms.text(p) for p in state.functional_properties())
     add, rem, iadd, irem = ([tuple(t) for t in ts] for ts in net.texts)
     replaced = list(dict.fromkeys((t[0], t[1]) for t in (*add, *rem) if t[1] in functional))
     decision = Decision(
         space=state.name,
-        payload=logged_payload(net.entry.payload, net.entry.dropped),
+        payload=logged_payload(net.entry.payload, net.entry.dropped, origin),
         revision=revision,
         stamp=stamp,
         functional=functional,

@@ -23,7 +23,7 @@ from collections import ChainMap
 from space.changeset import pack, unpack
 from space.errors import MalformedPayload
 from space.prefixes import PrefixMap
-from space.store.cluster_entries import DROPPED
+from space.store.cluster_entries import DROPPED, ORIGIN
 from space.store.db import StoreDB
 from space.store.db_layout import Entry
 from space.store.intake import WriteRequest
@@ -67,6 +67,7 @@ class ClusterSpace(SpaceState):
         if not isinstance(wire, dict):
             raise MalformedPayload("a logged changeset is a map")
         dropped = wire.pop(DROPPED, None)  # for the log entry, not the changeset published
+        wire.pop(ORIGIN, None)  # for the replica that decided it
         wire["seq"] = seq
         bindings = wire.get("prefixes") or {}
         # New to the database, also when our own decision already taught them to `prefixes`.

@@ -23,6 +23,7 @@ from __future__ import annotations
 import concurrent.futures
 import logging
 import queue
+import secrets
 import uuid
 from collections.abc import Callable
 
@@ -82,7 +83,10 @@ class ClusterWriter:
         self._spaces, self._space, self._publisher = spaces, space, publisher
         self._staged: list[Flight] = []
         self._writers: dict[bytes, Flight] = {}  # key -> our latest flight writing it
+        # Our flights by logged payload, which names this writer (`logged_payload`): a retry
+        # another replica decided alike, on the same state, is not taken for ours.
         self._by_payload: dict[bytes, Flight] = {}
+        self._origin = secrets.token_hex(8)
         self._by_request: dict[tuple[str, str], Flight] = {}
         self._parked: list[tuple[int, Callable[[], None]]] = []  # (revision, what then)
         self._applied: list[tuple[int, list[Batch]]] = []
@@ -189,7 +193,9 @@ class ClusterWriter:
         *,
         taken: bool,
     ) -> None:
-        entry = guarded_entry(self.root, state, net, self.revision, stamp, ident, taken=taken)
+        entry = guarded_entry(
+            self.root, state, net, self.revision, stamp, ident, taken=taken, origin=self._origin
+        )
         flight = Flight(req, state, net, reply, entry, attempt, ident)
         self._by_payload[entry.payload] = flight
         self._by_request[(state.name, ident)] = flight
