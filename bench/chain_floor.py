@@ -21,7 +21,9 @@ Cases (milliseconds from the start's HLC time to stage 3 published, p50/p99):
   that decode every change and do nothing, as end_to_end.py's other agents
   (default 2: five client processes, as there).
 
-Run: python bench/chain_floor.py [--runs 200] [--bystanders 2] [--json] [--no-plot].
+Run: python bench/chain_floor.py [--runs 200] [--bystanders 2] [--old TREE] [--json]
+[--no-plot]. `--old TREE` runs the store and the relays from another source tree too
+(a worktree of the code before), in turn with this one.
 """
 
 from __future__ import annotations
@@ -33,10 +35,11 @@ import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 
 import msgpack
 import zenoh
-from _harness import free_port, median, percentile, serve_process
+from _harness import code_env, free_port, median, percentile, serve_process
 from _output import bench_parser, parse, print_table
 from rdflib import Literal, URIRef
 
@@ -84,14 +87,17 @@ def zenoh_relay(endpoint: str, role: str) -> None:
 
 
 @contextmanager
-def relays(endpoint: str, roles: list[str], plain: bool = False) -> Iterator[None]:
-    """Run one relay process per role; stop them (their stdin closed) after."""
+def relays(
+    endpoint: str, roles: list[str], plain: bool = False, code: Path | None = None
+) -> Iterator[None]:
+    """Run one relay process per role (its library from `code` if given); stop them after."""
     mode = "--zenoh-relay" if plain else "--relay"
     procs = [
         subprocess.Popen(
             [sys.executable, __file__, mode, role, "--connect", endpoint],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
+            env=code_env(code),
         )
         for role in roles
     ]
@@ -113,13 +119,16 @@ def relays(endpoint: str, roles: list[str], plain: bool = False) -> Iterator[Non
                 proc.wait()
 
 
-def store_chain(runs: int, bystanders: int) -> list[float]:
-    """Time `runs` chains through `tspace serve`; return ms from start to stage 3 published."""
+def store_chain(runs: int, bystanders: int, code: Path | None = None) -> list[float]:
+    """Time `runs` chains through `tspace serve`; return ms from start to stage 3 published.
+
+    `code`: the source tree the store and the relays run from (default: this one).
+    """
     arrivals: queue.SimpleQueue[tuple[float, bytes]] = queue.SimpleQueue()
     with (
-        serve_process() as (endpoint, _pid),
+        serve_process(code) as (endpoint, _pid),
         TripleSpace.open(endpoint, space=SPACE, agent="bench") as ts,
-        relays(endpoint, ["2", "3", *["0"] * bystanders]),
+        relays(endpoint, ["2", "3", *["0"] * bystanders], code=code),
     ):
         sub = ts.session.declare_subscriber(
             f"tspace/{SPACE}/@/changes",
@@ -180,6 +189,9 @@ def main() -> None:
     parser = bench_parser(__doc__)
     parser.add_argument("--runs", type=int, default=200, help="chains per case")
     parser.add_argument("--bystanders", type=int, default=2, help="idle subscribers beside")
+    parser.add_argument(
+        "--old", type=Path, metavar="TREE", help="also run the store and relays from TREE"
+    )
     parser.add_argument("--relay", help=argparse.SUPPRESS)
     parser.add_argument("--zenoh-relay", help=argparse.SUPPRESS)
     parser.add_argument("--connect", help=argparse.SUPPRESS)
@@ -188,11 +200,14 @@ def main() -> None:
         return relay(args.connect, args.relay)
     if args.zenoh_relay is not None:
         return zenoh_relay(args.connect, args.zenoh_relay)
-    cases = {
-        "zenoh, 3 puts through a router": zenoh_chain(args.runs),
-        "store, 3 hops": store_chain(args.runs, 0),
-        f"store, 3 hops + {args.bystanders} bystanders": store_chain(args.runs, args.bystanders),
-    }
+    cases = {"zenoh, 3 puts through a router": zenoh_chain(args.runs)}
+    trees: list[tuple[str, Path | None]] = [("", None)]
+    if args.old is not None:
+        trees = [(" (old)", args.old.resolve()), (" (new)", None)]
+    for bystanders in (0, args.bystanders):
+        for label, code in trees:  # in turn: a slow spell of a shared machine hits both
+            name = "store, 3 hops" + (f" + {bystanders} bystanders" if bystanders else "")
+            cases[name + label] = store_chain(args.runs, bystanders, code)
     title = f"start -> stage 3 published (ms; {args.runs} chains a case)"
     header = ["case", "runs", "p50 (ms)", "p90 (ms)", "p99 (ms)"]
     rows = [
