@@ -218,6 +218,8 @@ class ScopedSubscription(Subscription):
                 gap = gap or prev > known
         if not fresh:
             return []
+        if len(fresh) < len(predicates):
+            wire = only(wire, set(fresh))  # checks their triples: a bad one skips the part
         changes: list[Received] = []
         if gap or seq > self.horizon + SLACK:
             try:
@@ -232,8 +234,6 @@ class ScopedSubscription(Subscription):
                 return changes
         for p in fresh:
             self._last[(s, p)] = seq
-        if len(fresh) < len(predicates):
-            wire = only(wire, set(fresh))
         received = self._changes(wire)
         if received and isinstance(count, int) and count >= BURST:
             self._open.add(seq)  # more may come: delivery waits for its end
