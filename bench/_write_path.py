@@ -10,7 +10,8 @@ Two cases, into a space already holding 100,000 inferred triples:
 - `200 replaced`: the reasoner's answer when 200 rules fire, 200 inferred values removed and
   200 added (issue 13's "+200 rules all firing"), whole path and `StoreDB.commit` alone;
 - `200 replaced, parts`: the same answer again, 100 times, with a subscriber to its parts
-  in another session (the store then cuts it into 200 parts, one a key, and puts each):
+  in another session (the store then cuts it by subject, 200 pairs of one subject in a few
+  parts of at most 4 KB of predicates in their keys, and puts each):
   the writer thread's CPU in `PartPublisher.publish`, median of the last 50 (its keys come
   back every time, as those of a reasoner's answer do);
 - `bulk`: 200,000 new triples in changesets of 10,000, as `tspace write` of a big file
@@ -176,8 +177,8 @@ def _parts(session: zenoh.Session, write: Callable[[dict], float], endpoint: str
     publish = PartPublisher.publish
     PartPublisher.publish = _timed(publish, calls, time.thread_time)  # type: ignore[method-assign]
     with zenoh.open(make_config(mode="peer", connect=[endpoint])) as other:
-        subscriber = other.declare_subscriber("tspace/w/@/changes/*/*", lambda _s: None)
-        watcher = session.declare_publisher("tspace/w/@/changes/*/*")
+        subscriber = other.declare_subscriber("tspace/w/@/changes/*/*/**", lambda _s: None)
+        watcher = session.declare_publisher("tspace/w/@/changes/*/*/**")
         deadline = time.monotonic() + 10
         while not watcher.matching_status.matching and time.monotonic() < deadline:
             time.sleep(0.01)

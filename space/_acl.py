@@ -60,7 +60,7 @@ def _reads(root: str) -> list[dict]:
             [
                 f"{root}/**",
                 f"{space}/@/changes",
-                f"{space}/@/changes/*/*",
+                f"{space}/@/changes/*/**",  # parts: a subject, then its predicates
                 f"{space}/@/changes/end",
                 f"{space}/@/seq",
                 f"{root}/@cluster/*",

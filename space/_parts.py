@@ -1,13 +1,16 @@
-"""Changesets cut by (subject, predicate): what a scoped subscriber receives.
+"""Changesets cut by subject, each part keyed by its predicates: what a scoped subscriber receives.
 
 Besides each whole changeset on `@/changes`, the store publishes the part about
-each (subject, predicate) on `@/changes/<s>/<p>`, with `prev`: the seq of the
-previous changeset that had a part on that key. A subscriber that selects keys
-with key expressions (a robot's subjects, `<...%23robot7_$*>/*`) so receives
-its share of a fleet's traffic only, Zenoh filtering before Python decodes, and
-a `prev` it has not seen tells it a part went missing. The chunks are the
-terms' full N-Triples text, escaped, never compacted: a term's key must not
-change when the space learns a prefix later. See docs/wire-format.md.
+each subject on `@/changes/<s>/<p1>/<p2>/...`, its predicates in the key (sorted,
+a long list cut into several parts, `GROUP`), with `prev`: for each of those
+(subject, predicate) pairs, the seq of the previous changeset that had triples on
+it. A subscriber that selects keys with key expressions (a robot's subjects,
+`<...%23robot7_$*>/*/**`; a predicate, `*/**/<p>/**`) so receives its share of a
+fleet's traffic only, Zenoh filtering before Python decodes, and a `prev` it has
+not seen tells it a part went missing. One put a subject, not one a pair: a
+reasoner's answer of 200 settings of one robot is a few puts, not 200. The
+chunks are the terms' full N-Triples text, escaped, never compacted: a term's
+key must not change when the space learns a prefix later. See docs/wire-format.md.
 """
 
 from __future__ import annotations
@@ -23,13 +26,19 @@ from space.keys import escape
 from space.terms import CACHED, to_nt
 
 HEADER = ("v", "id", "agent", "ts", "cause", "seq", "lifespan")  # repeated in every part
-# A changeset cut into BURST parts or more is followed by its end (`keys.end_key`): a scoped
-# subscriber delivers its parts of it as one change when the end comes, not part by part.
+# A changeset of BURST (subject, predicate) pairs or more is followed by its end
+# (`keys.end_key`): a scoped subscriber delivers its parts of it as one change when the end
+# comes, not part by part.
 BURST = 8
 NAMED = 64  # an end names its changeset's subjects and predicates, up to this many chunks
+# Bytes of predicate chunks in one part's key, at most. Zenoh routes a key against each
+# subscriber's expression chunk by chunk (~3 us a chunk with 20 subscriptions, to declare a
+# publisher as to put undeclared), and past ~100 chunks worse than linearly (200: 1.7 ms):
+# 200 settings are 3 parts of ~70 predicates, not 200 puts nor one key of 11 KB.
+GROUP = 4096
 
 Part = dict  # a changeset map: the header of its changeset, the triples of one key
-PartKey = tuple[str, str]  # (subject chunk, predicate chunk)
+PartKey = tuple[str, str]  # (subject chunk, predicate chunk): a pair
 
 
 def split(wire: Mapping) -> dict[PartKey, Part]:
@@ -72,8 +81,44 @@ def cut(
 _chunk = lru_cache(maxsize=CACHED)(escape)
 
 
-def end(seq: int, parts: Mapping[PartKey, Part]) -> dict:
-    """Return the end of a changeset cut into `parts`: its seq and, if few, its keys' chunks.
+def grouped(
+    pairs: Mapping[PartKey, dict[str, list]],
+) -> list[tuple[str, list[str], dict[str, list]]]:
+    """Return a changeset's parts by subject: `(s, predicates, lists)`, from its pairs' lists.
+
+    Each subject's predicates are sorted, so a key comes back when its pairs do (a
+    declared publisher pays off), and cut where their chunks pass `GROUP` bytes.
+    """
+    subjects: dict[str, list[str]] = {}
+    for s, p in pairs:
+        subjects.setdefault(s, []).append(p)
+    out = []
+    for s, predicates in subjects.items():
+        group: list[str] = []
+        size = 0
+        for p in sorted(predicates):
+            if group and size + len(p) > GROUP:
+                out.append((s, group, _merged([pairs[(s, q)] for q in group])))
+                group, size = [], 0
+            group.append(p)
+            size += len(p) + 1
+        out.append((s, group, _merged([pairs[(s, q)] for q in group])))
+    return out
+
+
+def _merged(lists: list[dict[str, list]]) -> dict[str, list]:
+    """Return the lists of several pairs as one part's (the first pair's lists when alone)."""
+    if len(lists) == 1:
+        return lists[0]
+    merged: dict[str, list] = {}
+    for listed in lists:
+        for name, triples in listed.items():
+            merged.setdefault(name, []).extend(triples)
+    return merged
+
+
+def end(seq: int, parts: Mapping[PartKey, object]) -> dict:
+    """Return the end of a changeset of `parts` (its pairs): its seq and, if few, their chunks.
 
     A subscriber with no selector that matches one of its subjects and one of its
     predicates then knows at once that no part was for it (`space._scoped`).
@@ -98,6 +143,20 @@ def joined(parts: list[Part]) -> Part:
             if listed:
                 merged.setdefault(name, []).extend(listed)
     return merged
+
+
+def only(part: Part, predicates: set[str]) -> Part:
+    """Return a part with the triples of the predicates given (their chunks) only.
+
+    Raises:
+        MalformedPayload: a listed triple is not three N-Triples terms.
+    """
+    kept = {name: value for name, value in part.items() if name not in LISTS}
+    for name in LISTS:
+        listed = [t for t in _listed(part, name) if chunks(t)[1] in predicates]
+        if listed:
+            kept[name] = listed
+    return kept
 
 
 def _listed(wire: Mapping, name: str) -> list:

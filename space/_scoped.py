@@ -1,12 +1,14 @@
-"""A subscription to some (subject, predicate) keys only: Zenoh filters, the chain finds gaps.
+"""A subscription to some (subject, predicate) pairs only: Zenoh filters, the chain finds gaps.
 
-It declares one Zenoh subscriber per selector on `@/changes/<s>/<p>` (see
-`space._parts`) and delivers the parts it receives as `Change`s: the parts of
+It declares one Zenoh subscriber per selector on `@/changes/<s>/<p1>/...` (see
+`space._parts`: a part is a subject's triples, its predicates in its key) and
+delivers the parts it receives as `Change`s, with the triples of the pairs it
+selects only: the parts of
 one changeset that arrive together (the store publishes them in one burst) as
 one, a part that comes late as another with the same id and seq. After a part of
-a changeset of many (`n` >= `BURST`) the dispatcher waits for that changeset's
+a changeset of many (`n` >= `BURST` pairs) the dispatcher waits for that changeset's
 end, which the store publishes after its parts (`keys.end_key`): see `on_end`.
-Per key, it
+Per pair, it
 remembers the seq of the last part delivered; the store's `prev` says which
 seq it should be. When `prev` names one it never saw
 (past `last_seq`, up to which it holds everything selected), it fetches the
@@ -29,7 +31,7 @@ import zenoh
 from rdflib import BNode, Literal, URIRef
 
 from space import keys
-from space._parts import BURST, Part, joined, split, term_chunk
+from space._parts import BURST, Part, PartKey, joined, only, split, term_chunk
 from space._subscription import LATEST, Callback, Change, Dispatcher, Fetch, Subscription
 from space.changeset import published_seq, unpack
 from space.errors import InputError, MalformedPayload, SpaceError
@@ -46,8 +48,8 @@ class ScopedSubscription(Subscription):
     """One `subscribe(..., scope=...)`: the parts of changes on the selected keys.
 
     Args:
-        selectors: key expressions of `<s>/<p>`, each two chunks (`selectors()` makes
-            them from terms and IRI prefixes).
+        selectors: `<s>/<p>`, each two chunks of key expressions (`selectors()` makes
+            them from terms and IRI prefixes); `selector_key` makes their keys.
     """
 
     merges = True
@@ -65,10 +67,11 @@ class ScopedSubscription(Subscription):
         super().__init__(dispatcher, template, callback, skip_agent=skip_agent)
         self.space = space
         self.keys = [selector_key(space, s) for s in selectors]
-        self._exprs = [zenoh.KeyExpr(k) for k in self.keys]
         self.horizon = 0  # the highest seq the store itself said it reached
-        self._last: dict[str, int] = {}  # part key -> seq of the last part delivered on it
+        self._last: dict[PartKey, int] = {}  # pair -> seq of the last part delivered on it
         self._patterns = [_patterns(s) for s in selectors]  # (subject, predicate) chunk matchers
+        self._choice: dict[PartKey, bool] = {}  # pair -> selected (`_chosen`)
+        self._prefix = keys.service_key(space, "changes") + "/"
         self._token = os.urandom(8)  # marks this subscription's own samples of ends
         self._through = _through(self.keys)
         self._expected = sum(n for _key, n in self._through)  # samples of one end to come back
@@ -130,14 +133,17 @@ class ScopedSubscription(Subscription):
             s, p = term_chunk(triple[0]), term_chunk(triple[1])
         except TypeError:
             return False
-        return self._selects(keys.part_key(self.space, s, p))
+        return self._chosen(s, p)
 
-    def _selects(self, key: str) -> bool:
-        try:
-            expr = zenoh.KeyExpr(key)
-        except (zenoh.ZError, ValueError):
-            return False
-        return any(e.intersects(expr) for e in self._exprs)
+    def _chosen(self, s: str, p: str) -> bool:
+        """Return whether a selector selects the pair of chunks (s, p) (remembered)."""
+        chosen = self._choice.get((s, p))
+        if chosen is None:
+            if len(self._choice) >= _CHOICES:
+                self._choice.clear()
+            chosen = any(bool(ms(s)) and bool(mp(p)) for ms, mp in self._patterns)
+            self._choice[(s, p)] = chosen
+        return chosen
 
     def start(self, seq: int) -> None:
         """Note the store's seq the subscription starts from."""
@@ -200,15 +206,22 @@ class ScopedSubscription(Subscription):
         wire = unpack(payload)
         seq = published_seq(wire)
         assert isinstance(wire, dict)
-        prev = wire.get("prev")
-        if not isinstance(prev, int) or isinstance(prev, bool) or not 0 <= prev < seq:
-            raise MalformedPayload(f"a published part has a 'prev' below its seq, got {prev!r}")
-        count = wire.get("n")  # optional: how many parts its changeset was cut into
-        known = max(self.last_seq, self._last.get(key, 0))
-        if seq <= known:
+        s, predicates = self._pairs(key)
+        prevs = _prevs(wire.get("prev"), len(predicates), seq)
+        count = wire.get("n")  # optional: how many pairs its changeset has
+        fresh: list[str] = []  # the part's selected predicates not delivered yet
+        gap = False
+        for p, prev in zip(predicates, prevs, strict=True):
+            known = max(self.last_seq, self._last.get((s, p), 0))
+            if seq > known and self._chosen(s, p):
+                fresh.append(p)
+                gap = gap or prev > known
+        if not fresh:
             return []
+        if len(fresh) < len(predicates):
+            wire = only(wire, set(fresh))  # checks their triples: a bad one skips the part
         changes: list[Received] = []
-        if prev > known or seq > self.horizon + SLACK:
+        if gap or seq > self.horizon + SLACK:
             try:
                 changes = self._fetch(seq - 1, fetch)
             except SpaceError as exc:
@@ -219,11 +232,23 @@ class ScopedSubscription(Subscription):
                     "part %d on %s is past the store's seq %d: skipped", seq, key, self.horizon
                 )
                 return changes
-        self._last[key] = seq
+        for p in fresh:
+            self._last[(s, p)] = seq
         received = self._changes(wire)
         if received and isinstance(count, int) and count >= BURST:
             self._open.add(seq)  # more may come: delivery waits for its end
         return changes + received
+
+    def _pairs(self, key: str) -> tuple[str, list[str]]:
+        """Return the subject chunk and the predicate chunks of a part's key.
+
+        Raises:
+            MalformedPayload: not a part's key of this space.
+        """
+        chunks_ = key[len(self._prefix) :].split("/") if key.startswith(self._prefix) else []
+        if len(chunks_) < 2:
+            raise MalformedPayload(f"not a part's key: {key:.120}")
+        return chunks_[0], chunks_[1:]
 
     def _ended(self, seq: int) -> None:
         """Count a sample of a changeset's end come back; the last one ends the wait for it."""
@@ -284,10 +309,9 @@ class ScopedSubscription(Subscription):
         """Return the selected parts of one logged changeset not delivered yet, merged."""
         kept = []
         for (s, p), part in parts.items():
-            key = keys.part_key(self.space, s, p)
-            if seq <= self._last.get(key, 0) or not self._selects(key):
+            if seq <= self._last.get((s, p), 0) or not self._chosen(s, p):
                 continue
-            self._last[key] = seq
+            self._last[(s, p)] = seq
             kept.append(part)
         return joined(kept) if kept else None
 
@@ -305,6 +329,26 @@ class Ended:
 
 
 _ENDS = 64  # changesets whose end is partly back, at most (more: the oldest were lost)
+_CHOICES = 100_000  # pairs whose selection is remembered, at most (then forgotten at once)
+
+
+def _prevs(prev: object, count: int, seq: int) -> list[int]:
+    """Return a part's `prev` for each of its `count` pairs (one pair: an int, else a list).
+
+    Raises:
+        MalformedPayload: not that, or a `prev` not below the part's seq.
+    """
+    prevs = [prev] if count == 1 else prev
+    if (
+        not isinstance(prevs, list)
+        or len(prevs) != count
+        or not all(isinstance(x, int) and not isinstance(x, bool) and 0 <= x < seq for x in prevs)
+    ):
+        raise MalformedPayload(
+            f"a published part has a 'prev' below its seq for each pair, got {prev!r:.80}"
+        )
+    return prevs  # type: ignore[return-value]
+
 
 Matcher = Callable[[str], object]  # truthy for a key chunk a selector's chunk matches
 
@@ -328,14 +372,16 @@ def _matcher(chunk: str) -> Matcher:
 def _through(part_keys: list[str]) -> list[tuple[str, int]]:
     """Return, for each selector's key expression, a key it matches and how many of them do.
 
-    The key is the key expression with its wildcards filled (`*` -> `_`, `$*` -> ``).
+    The key is the key expression with its wildcards filled (`*`, `**` -> `_`, `$*` -> ``).
     Empty when a selector has no such key: then ends are not sent back, and delivery
     waits for the rest of a changeset of many only as long as parts keep coming.
     """
     exprs = [zenoh.KeyExpr(k) for k in part_keys]
     through = []
     for expr in exprs:
-        chunks_ = [("_" if c == "*" else c.replace("$*", "")) or "_" for c in str(expr).split("/")]
+        chunks_ = [
+            ("_" if c in ("*", "**") else c.replace("$*", "")) or "_" for c in str(expr).split("/")
+        ]
         try:
             key = zenoh.KeyExpr("/".join(chunks_))
         except (zenoh.ZError, ValueError):
@@ -358,13 +404,17 @@ class Received:
 def selector_key(space: str, selector: str) -> str:
     """Return the key expression of a selector `<s>/<p>` (two chunks, wildcards allowed).
 
+    It matches the parts about a subject `<s>` matches whose key names a predicate
+    `<p>` matches (`<s>/**/<p>/**`; `<s>/*/**` for any predicate).
+
     Raises:
         InputError: not two chunks, or not a valid key expression.
     """
     chunks_ = selector.split("/")
     if len(chunks_) != 2 or "**" in chunks_:
         raise InputError(f"scope {selector!r}: write SUBJECT/PREDICATE, each one key chunk")
-    key = keys.part_key(space, *chunks_)
+    s, p = chunks_
+    key = keys.part_key(space, s, "*/**" if p == "*" else f"**/{p}/**")
     try:
         zenoh.KeyExpr(key)
     except (zenoh.ZError, ValueError) as exc:

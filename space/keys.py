@@ -50,16 +50,17 @@ def service_key(space: str, service: str, root: str = ROOT) -> str:
 def end_key(space: str, root: str = ROOT) -> str:
     """Return the key of the end of a changeset's parts: every scoped subscriber hears it.
 
-    One chunk after `@/changes`, so no part selector (two chunks) matches it.
+    One chunk after `@/changes`, so no part selector (two chunks or more) matches it.
     """
     return f"{root}/{space}/@/changes/end"
 
 
 def part_key(space: str, s_chunk: str, p_chunk: str, root: str = ROOT) -> str:
-    """Return the key of the part of each changeset about one (subject, predicate).
+    """Return the key of a changeset's part about one subject and the predicates `p_chunk` names.
 
-    `s_chunk`, `p_chunk`: term chunks (`term_chunk`), or key-expression chunks
-    (`*`, `ac:robot7_$*`) to select several.
+    `s_chunk`: a term chunk (`term_chunk`); `p_chunk`: one, or several joined by `/`
+    (`space._parts.grouped`). A pair's own key (one predicate) is also how a
+    subscriber names it; key-expression chunks (`*`, `ac:robot7_$*`) select several.
     """
     return f"{root}/{space}/@/changes/{s_chunk}/{p_chunk}"
 

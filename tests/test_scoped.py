@@ -374,3 +374,61 @@ def test_a_malformed_part_costs_only_itself_not_the_parts_delivered_with_it(capl
         change = sub.change(queued[0])
     assert change is not None and change.added == [level(1, "low")]
     assert "malformed change skipped" in caplog.text
+
+
+def settings(robot: int, value: str, count: int = 200) -> list:
+    return [(AC[f"robot{robot}_base"], AC[f"setting_{i}"], Literal(value)) for i in range(count)]
+
+
+def test_a_subjects_many_predicates_travel_in_a_few_parts_a_predicate_scope_gets_its_own(ts):
+    # One part a subject, its predicates in its key: 200 settings of one base are a few
+    # puts, not 200; a subscriber of one predicate gets that predicate's triple only.
+    heard: list = []
+    raw = ts.session.declare_subscriber(  # the store's parts: no attachment (ends sent back have)
+        f"tspace/{ts.space}/@/changes/*/*/**",
+        lambda sample: sample.attachment is None and heard.append(sample),
+    )
+    seen: list = []
+    ts.subscribe(None, seen.append, scope=[(None, AC.setting_7)])
+    ack = ts.write([*settings(1, "low"), (AC.robot1, AC.location, AC.hall)])
+    wait_for(lambda: seen, what="setting_7's triple")
+    wait_for(lambda: len(heard) >= 4, what="the parts")
+    raw.undeclare()
+    parts = [unpack(bytes(sample.payload)) for sample in heard]
+    assert {p["seq"] for p in parts} == {ack.seq}
+    assert len(parts) == 4  # the base's 200 predicates in 3 keys of at most 4 KB, robot1's 1
+    assert sum(len(p["add"]) for p in parts) == 201
+    assert all(p["n"] == 201 for p in parts)  # n counts the changeset's pairs
+    assert all(len(str(s.key_expr)) < 4200 for s in heard)
+    assert [c.added for c in seen] == [[(AC.robot1_base, AC.setting_7, Literal("low"))]]
+
+
+def test_a_lost_part_of_many_predicates_is_fetched_by_the_prev_of_a_selected_one(ts):
+    seen: list = []
+    sub = ts.subscribe(None, seen.append, scope=[(None, AC.setting_7)])
+    ts.write([(AC.robot1_base, AC.setting_7, Literal("normal"))])
+    wait_for(lambda: seen, what="the first part")
+    _cut(ts, sub)
+    ts.write(settings(1, "low", 20))  # lost: one part, setting_7 one of its 20 predicates
+    ts.write(settings(1, "high", 20)[8:])  # not setting_7: its prevs name the lost one
+    _mend(ts, sub)
+    ts.write(settings(1, "x", 20))  # one part again: its prev for setting_7 names the lost one
+    wait_for(lambda: len(seen) >= 3, what="the lost part, then the new one")
+    assert [c.added for c in seen] == [
+        [(AC.robot1_base, AC.setting_7, Literal(v))] for v in ("normal", "low", "x")
+    ]
+
+
+def test_a_part_whose_prev_does_not_fit_its_predicates_is_skipped(server, ts, caplog):
+    seen: list = []
+    ts.subscribe(None, seen.append, scope=SCOPE)
+    s = escape_key_chunk(f"<{AC_NS}robot1_base>")
+    p1, p2 = (escape_key_chunk(f"<{AC_NS}setting_{i}>") for i in (1, 2))
+    forged = {"v": 1, "id": "x", "agent": "f", "ts": "1/x", "seq": 1, "prev": [0]}
+    with caplog.at_level(logging.WARNING, logger="tspace.subscription"):
+        with zenoh.open(make_config(mode="client", connect=[server.endpoint])) as plain:
+            plain.put(f"tspace/{ts.space}/@/changes/{s}/{p1}/{p2}", pack(forged))
+        ts.write([level(1, "low")])
+        wait_for(lambda: seen, what="the real part")
+    assert [c.added for c in seen] == [[level(1, "low")]]
+    assert "for each pair" in caplog.text

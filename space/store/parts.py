@@ -1,14 +1,15 @@
-"""Publish each committed changeset cut by (subject, predicate), chained by `prev`.
+"""Publish each committed changeset cut by subject, each part naming its predicates and `prev`s.
 
-A robot's agents select their robot's keys (`@/changes/<...%23robot7_$*>/*`) and
-Zenoh delivers them nothing else. Each part names the seq of the previous
-changeset with a part on its key (`prev`), so a subscriber tells a missed part
-from a key that was quiet. After the parts of a changeset of `BURST` parts or
-more it publishes the changeset's end (`space._parts.end`) on `keys.end_key`, from the
+A robot's agents select their robot's keys (`@/changes/<...%23robot7_$*>/*/**`) and
+Zenoh delivers them nothing else. A part's key is its subject and its predicates
+(`space._parts.grouped`); for each of those pairs it names the seq of the previous
+changeset with triples on it (`prev`), so a subscriber tells a missed part from a
+pair that was quiet. After the parts of a changeset of `BURST` pairs or more it
+publishes the changeset's end (`space._parts.end`) on `keys.end_key`, from the
 same session: Zenoh keeps one session's messages of one priority and
 reliability in order, so a subscriber that hears the end has heard every part
-before it (see `space._scoped`). The store keeps the last seq of each key in memory;
-a key it does not know (after a start, a failover, or forgotten to bound
+before it (see `space._scoped`). The store keeps the last seq of each pair in memory;
+a pair it does not know (after a start, a failover, or forgotten to bound
 memory, or while nobody selected parts) gets the `floor`: a seq no lower than
 its real previous part, which makes a subscriber not sure to have it fetch
 from the log (see `space._scoped`).
@@ -22,13 +23,13 @@ import msgpack
 import zenoh
 
 from space import keys
-from space._parts import BURST, cut, end, made_chunks
+from space._parts import BURST, PartKey, cut, end, grouped, made_chunks
 from space.changeset import LISTS, pack
 from space.store.state import Net, SpaceState
 
 log = logging.getLogger("tspace.store")
 
-MAX_KEYS = 200_000  # last seqs remembered per space; the oldest half is forgotten beyond
+MAX_KEYS = 200_000  # pairs whose last seq is kept per space; the oldest half is forgotten beyond
 OFTEN = 32  # puts on a key before it gets a declared publisher
 MAX_OFTEN = 4096  # keys whose puts are counted; the least recently put half is forgotten beyond
 MAX_KEY = 60_000  # bytes: a longer key is not published (Zenoh refuses ~64 KiB keys)
@@ -40,7 +41,7 @@ class PartPublisher:
     def __init__(self, session: zenoh.Session, root: str) -> None:
         self.session = session
         self.root = root
-        self._last: dict[str, dict[str, int]] = {}  # space -> part key -> seq of its last part
+        self._last: dict[str, dict[PartKey, int]] = {}  # space -> pair -> seq of its last part
         self._floor: dict[str, int] = {}
         self._watchers: dict[str, zenoh.Publisher] = {}
         self._ends: dict[str, zenoh.Publisher] = {}
@@ -79,18 +80,23 @@ class PartPublisher:
             return
         last = self._last.setdefault(space, {})
         floor = self._floor.setdefault(space, seq - 1)
-        parts = cut(zip(LISTS, net.texts, strict=True), made_chunks)
+        pairs = cut(zip(LISTS, net.texts, strict=True), made_chunks)
+        parts = grouped(pairs)
         head = self._packer.pack(net.header)[1:]  # its pairs, packed once for every part
-        for (s, p), part in parts.items():
-            key = keys.part_key(space, s, p, self.root)
-            prev = last.pop(key, floor)
-            last[key] = seq
+        for s, predicates, part in parts:
+            prevs = []
+            for p in predicates:
+                prevs.append(last.pop((s, p), floor))
+                last[(s, p)] = seq
+            key = keys.part_key(space, s, "/".join(predicates), self.root)
             if send and len(key) <= MAX_KEY:
-                part["prev"] = prev
-                part["n"] = len(parts)
-                self._often.put(key, self._map(head, len(net.header), part))
-        if send and len(parts) >= BURST:
-            self._end(space).put(pack(end(seq, parts)))
+                part["prev"] = prevs[0] if len(prevs) == 1 else prevs
+                part["n"] = len(pairs)
+                self._often.put(
+                    key, self._map(head, len(net.header), part), often=len(predicates) > 1
+                )
+        if send and len(pairs) >= BURST:
+            self._end(space).put(pack(end(seq, pairs)))
         if len(last) > MAX_KEYS:
             self._forget(space, last)
 
@@ -113,8 +119,8 @@ class PartPublisher:
             )
         return publisher
 
-    def _forget(self, space: str, last: dict[str, int]) -> None:
-        """Forget the oldest half of a space's keys; their next part names the floor."""
+    def _forget(self, space: str, last: dict[PartKey, int]) -> None:
+        """Forget the oldest half of a space's pairs; their next part names the floor."""
         old = list(last)[: len(last) // 2]
         self._floor[space] = max(self._floor[space], *(last.pop(k) for k in old))
 
@@ -122,7 +128,7 @@ class PartPublisher:
         """Return whether any subscriber selects parts of a space (Zenoh's matching status)."""
         publisher = self._watchers.get(space)
         if publisher is None:
-            key = keys.part_key(space, "*", "*", self.root)
+            key = keys.part_key(space, "*", "*/**", self.root)
             publisher = self._watchers[space] = self.session.declare_publisher(key)
         return publisher.matching_status.matching
 
@@ -132,17 +138,23 @@ class _Often:
 
     A put on a declared publisher costs half a put on the session (~1 us less), but
     declaring one costs ~80: a key that comes back (a robot's, the reasoner's answer's)
-    earns one, a bulk write's keys (seen once) do not.
+    earns one, a bulk write's keys (seen once) do not. A key of several predicates
+    gets one at once: Zenoh matches it against every subscriber's expression chunk by
+    chunk, ~3 us a chunk with 20 of them, for a put on the session as for a declaration,
+    and a put on a declared publisher pays that once (`docs/performance.md`).
     """
 
     def __init__(self, session: zenoh.Session) -> None:
         self.session = session
         self._keys: dict[str, int | zenoh.Publisher] = {}  # key -> its puts, or its publisher
 
-    def put(self, key: str, payload: bytes) -> None:
-        """Put a part on its key (BLOCK, as every part: none is dropped when a link is slow)."""
+    def put(self, key: str, payload: bytes, *, often: bool = False) -> None:
+        """Put a part on its key (BLOCK, as every part: none is dropped when a link is slow).
+
+        `often`: declare its publisher now (a key of several predicates).
+        """
         seen = self._keys.pop(key, 0)  # put back last: the least recently put are forgotten
-        if isinstance(seen, int) and seen + 1 < OFTEN:
+        if isinstance(seen, int) and seen + 1 < OFTEN and not often:
             self._keys[key] = seen + 1
             self.session.put(key, payload, congestion_control=zenoh.CongestionControl.BLOCK)
         else:
