@@ -37,6 +37,7 @@ from space import (
     declare_agent,
     identity_of,
 )
+from space.mirror import Reads
 
 Values = Mapping[tuple[Node, Node], Node | None]
 
@@ -69,6 +70,11 @@ class Agent:
             its robot's own subjects (`ac:robot7`, `ac:robot7_*`): it then receives only
             those parts of the space's changes, the router filtering out the rest of a
             fleet's traffic (`TripleSpace.subscribe(scope=...)`). None: every change.
+        ticks_on_reads: True for an agent that decides in `tick` from its view alone: a
+            change then wakes the tick only when it adds or removes a triple of a
+            (subject, predicate) the last tick read (`SpaceMirror.reading`; the values it
+            writes are read too, by `set_values`), never when it is the agent's own write
+            coming back. False: every batch of changes wakes it.
         args: the parsed command line.
         robot: the robot this agent serves.
         name: the agent's name in logs, liveliness and changesets.
@@ -80,6 +86,7 @@ class Agent:
     per_robot: ClassVar[bool] = True
     keeps_view: ClassVar[bool] = True
     shared: ClassVar[tuple[URIRef, ...] | None] = None
+    ticks_on_reads: ClassVar[bool] = False
 
     def __init__(self, args: argparse.Namespace) -> None:
         self.args = args
@@ -99,6 +106,7 @@ class Agent:
         self._early: list[Callable[[], None]] = []
         self._leased: dict[tuple[Node, Node], Node] = {}  # values set, renewed while alive
         self._next_renewal = 0.0
+        self._reads: Reads | None = None  # what the last tick read (`ticks_on_reads`)
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -165,8 +173,9 @@ class Agent:
         """Handle changes and tick until `stop()`.
 
         A tick follows every batch of changes at once (the changes waiting are
-        applied first), so an agent acts on a conclusion in milliseconds, not
-        at its next period; without changes it ticks every `--tick` seconds.
+        applied first; with `ticks_on_reads`, a batch of which one concerns the
+        tick), so an agent acts on a conclusion in milliseconds, not at its next
+        period; without changes it ticks every `--tick` seconds.
         """
         next_tick = time.monotonic()
         while not self._stop.is_set():
@@ -174,16 +183,16 @@ class Agent:
                 change = self._inbox.get(timeout=max(0.0, next_tick - time.monotonic()))
             except queue.Empty:
                 change = None
-            changed = change is not None
+            changed = False
             while change is not None:
-                self._handle(change)
+                changed |= self._handle(change)
                 try:
                     change = self._inbox.get_nowait()
                 except queue.Empty:
                     change = None
             self._surface_failed_writes()
             if self.started and (changed or time.monotonic() >= next_tick):
-                self._guarded(self.tick, "tick")
+                self._guarded(self._tick, "tick")
                 self._guarded(self._renew, "renewal")
                 next_tick = time.monotonic() + self.args.tick
             elif not self.started:
@@ -217,13 +226,15 @@ class Agent:
 
     # Handling
 
-    def _handle(self, change: Change | Callable[[], None]) -> None:
+    def _handle(self, change: Change | Callable[[], None]) -> bool:
+        """Handle a change or work; return whether a tick should follow."""
         if not isinstance(change, Change):
             if self.started:
                 self._guarded(change, "work")
             else:
                 self._early.append(change)
-            return
+            return True
+        wakes = self._wakes(change)
         if self.keeps_view:
             if not self.started and self.shared is not None:
                 change.added = View.concerning(change.added, self.robot)
@@ -242,6 +253,23 @@ class Agent:
                 self._guarded(self._early.pop(0), "work")
         else:
             self._guarded(lambda: self.on_change(change), f"change {change.id}")
+        return wakes
+
+    def _wakes(self, change: Change) -> bool:
+        """Return whether `change` concerns the tick (`ticks_on_reads`); always before a tick."""
+        if not self.ticks_on_reads or self._reads is None:
+            return True
+        return change.agent != self.name and self._reads.touched_by(change)
+
+    def _tick(self) -> None:
+        """Tick, noting what it read when a change wakes it only if it concerns that."""
+        if not self.ticks_on_reads:
+            self.tick()
+            return
+        self._reads = None  # a tick that fails half-way read an unknown part: every change wakes
+        with self.view.reading() as reads:
+            self.tick()
+        self._reads = reads
 
     def _guarded(self, step: Callable[[], None], what: str) -> None:
         """Run one step; what comes from the network may be malformed: log it, go on."""

@@ -33,6 +33,7 @@ class Behavior(Agent):
     kind = "behavior"
     # Besides its robot: who waits for a task it postponed, in which room, and the task types.
     shared = (AC.postponed_by, AC.waiting_for, AC.room, AC.type)
+    ticks_on_reads = True
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)

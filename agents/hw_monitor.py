@@ -30,6 +30,7 @@ class HwMonitor(Agent):
     kind = "hw_monitor"
     # Besides its robot: the places' crowds its lasers see, the levels and the task types.
     shared = (AC.crowd_level, AC.level, AC.below_percent, AC.type)
+    ticks_on_reads = True
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)

@@ -37,6 +37,7 @@ class NavMonitor(Agent):
     kind = "nav_monitor"
     # Besides its robot: where the places are, and the speed levels.
     shared = (AC.map_x, AC.map_y, AC.level, AC.meters_per_second)
+    ticks_on_reads = True
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)

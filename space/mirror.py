@@ -11,14 +11,19 @@ until both are gone. A functional property's new value replaces the old one
 Owned by one thread (an agent's loop: `apply`, then read `graph`), or fed by a
 subscription (`attach`: changes arrive on the client's dispatcher thread; read
 with `copy()`, `version`, `recent()`, which take the lock).
+
+The owner may note what some code reads (`reading()`): which later changes
+could make it decide otherwise (`Reads.touched_by`), so an agent need not
+decide again on a change that concerns none of it.
 """
 
 from __future__ import annotations
 
 import threading
 from collections import deque
-from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 from datetime import datetime
 from typing import TYPE_CHECKING
 
@@ -74,6 +79,36 @@ class ChangeRecord:
         )
 
 
+@dataclass
+class Reads:
+    """What some code read from a mirror: the (subject, predicate) pairs it looked up.
+
+    Attributes:
+        pairs: (subject, predicate) pairs read; (None, predicate): that predicate's
+            triples of any subject (a lookup of subjects).
+        everything: it read the rdflib `graph`, where lookups are not noted.
+    """
+
+    pairs: set[tuple[Node | None, Node]] = field(default_factory=set)
+    everything: bool = False
+
+    def touched_by(self, change: Changeset) -> bool:
+        """Return whether `change` adds or removes a triple of what was read."""
+        if self.everything:
+            return True
+        pairs = self.pairs
+        for triples in (
+            change.added,
+            change.removed,
+            change.inferred_added,
+            change.inferred_removed,
+        ):
+            for s, p, _o in triples:
+                if (s, p) in pairs or (None, p) in pairs:
+                    return True
+        return False
+
+
 class SpaceMirror:
     """Keep a space's triples in memory, with the lookups deciding from them needs.
 
@@ -94,7 +129,8 @@ class SpaceMirror:
         history: int = 200,
     ) -> None:
         self._store = BulkMemory()
-        self.graph = Graph(store=self._store)
+        self._graph = Graph(store=self._store)
+        self._reads: Reads | None = None
         self._origins: dict[Triple, int] = {}
         self._functional: set[Node] = set()
         self._recent: deque[ChangeRecord] = deque(maxlen=history)
@@ -104,6 +140,26 @@ class SpaceMirror:
         self._space: TripleSpace | None = None
         self._watchers: list[Callable[[], None]] = []
         self.add(triples)
+
+    @property
+    def graph(self) -> Graph:
+        """Return the live union graph (see the class); reading it notes everything read."""
+        if self._reads is not None:
+            self._reads.everything = True
+        return self._graph
+
+    @contextmanager
+    def reading(self) -> Iterator[Reads]:
+        """Note the lookups made inside the block (owner thread); yield what they read."""
+        reads = self._reads = Reads()
+        try:
+            yield reads
+        finally:
+            self._reads = None
+
+    def _read(self, subject: Node | None, predicate: Node) -> None:
+        if self._reads is not None:
+            self._reads.pairs.add((subject, predicate))
 
     # Keeping it current
 
@@ -213,15 +269,18 @@ class SpaceMirror:
 
     def is_functional(self, predicate: Node) -> bool:
         """Return True if the copy declares `predicate` an owl:FunctionalProperty."""
+        self._read(predicate, RDF.type)
         return predicate in self._functional
 
     def __contains__(self, triple: Triple) -> bool:
+        self._read(triple[0], triple[1])
         return self._store.has(triple)
 
     def value(self, subject: Node | None, predicate: Node) -> Node | None:
         """Return one object of (subject, predicate) (the least, for determinism), or None."""
         if subject is None:
             return None
+        self._read(subject, predicate)
         return min(self._store.objects_of(subject, predicate), default=None)
 
     def text(self, subject: Node | None, predicate: Node) -> str | None:
@@ -241,12 +300,15 @@ class SpaceMirror:
 
     def objects(self, subject: Node, predicate: Node) -> list[Node]:
         """Return the objects of (subject, predicate), sorted for determinism."""
+        self._read(subject, predicate)
         return sorted(self._store.objects_of(subject, predicate))
 
     def subjects(self, predicate: Node, obj: Node | None = None) -> list[Node]:
         """Return the subjects of (predicate, obj), of any object when `obj` is None; sorted."""
+        self._read(None, predicate)
         return sorted(self._store.subjects_of(predicate, obj))
 
     def has_type(self, subject: Node, cls: Node) -> bool:
         """Return True if `subject rdf:type cls` is in the copy."""
+        self._read(subject, RDF.type)
         return self._store.has((subject, RDF.type, cls))

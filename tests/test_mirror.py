@@ -50,3 +50,19 @@ def test_a_functional_value_arriving_first_replaces_the_old_one():
     assert mirror.is_functional(EX.level)
     mirror.remove([FUNCTIONAL])
     assert not mirror.is_functional(EX.level)
+
+
+def test_what_was_read_says_which_changes_could_change_the_decision():
+    mirror = SpaceMirror([(EX.b, EX.level, Literal("normal")), (EX.p, EX.x, Literal(1))])
+    with mirror.reading() as reads:
+        mirror.value(EX.b, EX.level)
+        mirror.subjects(EX.x)
+    assert reads.touched_by(Changeset(added=[(EX.b, EX.level, Literal("low"))]))
+    assert reads.touched_by(Changeset(inferred_removed=[(EX.q, EX.x, Literal(2))]))
+    assert not reads.touched_by(Changeset(added=[(EX.b, EX.speed, Literal(3))]))
+    assert not reads.touched_by(Changeset(removed=[(EX.c, EX.level, Literal("low"))]))
+    mirror.value(EX.b, EX.speed)  # outside the block: not noted
+    assert not reads.touched_by(Changeset(added=[(EX.b, EX.speed, Literal(3))]))
+    with mirror.reading() as reads:
+        len(mirror.graph)  # rdflib's own lookups are not noted: every change may matter
+    assert reads.touched_by(Changeset(added=[(EX.c, EX.speed, Literal(3))]))
