@@ -2,9 +2,10 @@
 
 An agent is constructed without side effects; `setup()` opens the space,
 declares the agent's liveliness token and rebuilds its view (snapshot, then
-every change after it, with no gap); `run()` pulls changes from a queue and
-ticks the agent until `stop()`; `shutdown()` closes everything in reverse
-order. Space callbacks only enqueue, so nothing ever blocks inside Zenoh.
+every change after it, with no gap); `run()` delivers changes on the agent's
+own thread (`TripleSpace.deliver`: no dispatcher thread between Zenoh and
+the agent) and ticks the agent until `stop()`; `shutdown()` closes everything
+in reverse order. Zenoh callbacks only enqueue, so nothing ever blocks inside Zenoh.
 `run_agent(cls, argv)` (`agents.process`) is the `__main__` of every `agents/NAME.py`.
 """
 
@@ -101,7 +102,8 @@ class Agent:
         self.started = False
         self._token: zenoh.LivelinessToken | None = None
         self._subscription: Subscription | None = None
-        self._inbox: queue.SimpleQueue[Change | Callable[[], None] | None] = queue.SimpleQueue()
+        self._inbox: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()  # before `ts`
+        self._changed = False  # whether what was delivered since the last tick calls for one
         self._stop = threading.Event()
         self._early: list[Callable[[], None]] = []
         self._leased: dict[tuple[Node, Node], Node] = {}  # values set, renewed while alive
@@ -134,6 +136,7 @@ class Agent:
                         config_file=self.args.config,
                         identity=identity_of(self.args, self.name),
                         lifespan=self.args.lifespan,
+                        dispatch_thread=False,  # `run` delivers
                     )
                     self._token = declare_agent(self.ts.session, self.ts.space, self.name)
                 self._subscription = self.subscribe()
@@ -163,7 +166,7 @@ class Agent:
         scope = self.scope()
         return self.ts.subscribe(
             None,
-            self._inbox.put,
+            self._receive,
             snapshot="all" if scope is not None else True,
             timeout=self.args.timeout,
             scope=scope,
@@ -177,21 +180,16 @@ class Agent:
         tick), so an agent acts on a conclusion in milliseconds, not at its next
         period; without changes it ticks every `--tick` seconds.
         """
+        assert self.ts is not None
         next_tick = time.monotonic()
         while not self._stop.is_set():
-            try:
-                change = self._inbox.get(timeout=max(0.0, next_tick - time.monotonic()))
-            except queue.Empty:
-                change = None
-            changed = False
-            while change is not None:
-                changed |= self._handle(change)
-                try:
-                    change = self._inbox.get_nowait()
-                except queue.Empty:
-                    change = None
+            while not self._inbox.empty():  # work handed over before the space was open
+                self.ts.post(self._inbox.get())
+            self._changed = False
+            if not self.ts.deliver(max(0.0, next_tick - time.monotonic())):
+                return  # closed
             self._surface_failed_writes()
-            if self.started and (changed or time.monotonic() >= next_tick):
+            if self.started and (self._changed or time.monotonic() >= next_tick):
                 self._guarded(self._tick, "tick")
                 self._guarded(self._renew, "renewal")
                 next_tick = time.monotonic() + self.args.tick
@@ -201,7 +199,7 @@ class Agent:
     def stop(self) -> None:
         """Make `run()` return soon; safe from a signal handler or another thread."""
         self._stop.set()
-        self._inbox.put(None)
+        self.call_soon(lambda: None)  # wakes `run()`
 
     def call_soon(self, work: Callable[[], None]) -> None:
         """Run `work` on the loop's thread soon, then tick; safe from any thread.
@@ -209,7 +207,11 @@ class Agent:
         What a Zenoh callback must not do itself (write to the space, call a
         service) it hands over so. Work before the view is rebuilt waits for it.
         """
-        self._inbox.put(work)
+        ts = self.ts
+        if ts is None:
+            self._inbox.put(work)  # posted once the space is open
+        else:
+            ts.post(lambda: self._receive(work))
 
     def shutdown(self) -> None:
         """Settle the writes in flight, close the subscription, the token and the space."""
@@ -225,6 +227,10 @@ class Agent:
             self._subscription, self._token, self.ts = None, None, None
 
     # Handling
+
+    def _receive(self, change: Change | Callable[[], None]) -> None:
+        """Take a change or work delivered on the loop's thread (within `run`'s `deliver`)."""
+        self._changed |= self._handle(change)
 
     def _handle(self, change: Change | Callable[[], None]) -> bool:
         """Handle a change or work; return whether a tick should follow."""

@@ -23,6 +23,8 @@ from agents.sim.devices import FAULTS, MODES, SWITCH_DELAY, Driver, drain, obsta
 from agents.vocabulary import AC, literal
 from space import Change
 
+_BATTERY = (AC.charge_percent, AC.battery_level)  # what another agent may set a battery to
+
 
 class HwMonitor(Agent):
     """Simulate and monitor a robot's devices: levels, faults and running modes."""
@@ -111,8 +113,8 @@ class HwMonitor(Agent):
 
         Without this the next reading would overwrite it with the simulated charge.
         """
-        if change.agent == self.name:
-            return
+        if change.agent == self.name or not any(p in _BATTERY for _s, p, _o in change.added):
+            return  # most changes: not a battery's, no device lookup
         battery = self.view.device(self.robot, AC.Battery)
         written = {p: o for s, p, o in change.added if s == battery}
         if AC.charge_percent in written:

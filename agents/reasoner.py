@@ -140,7 +140,7 @@ class Reasoner(Agent):
         engine = self.knowledge.build()
         # Its own answers are left out before parsing: it ignores them.
         subscription = self.ts.subscribe(
-            None, self._inbox.put, timeout=self.args.timeout, skip_own=True
+            None, self._receive, timeout=self.args.timeout, skip_own=True
         )
         try:
             args = self.args

@@ -44,6 +44,7 @@ class Writes:
         self._in_flight = 0
         self._lock = threading.Lock()
         self._thread = threading.Thread(target=self._run, name="agent-writes", daemon=True)
+        self._started = False
 
     def track(
         self, cs_id: str, pending: Pending, added: list[Triple], removed: list[Triple]
@@ -51,7 +52,8 @@ class Writes:
         """Read `pending`'s acknowledgement later; returns at once."""
         with self._lock:
             self._in_flight += 1
-            if not self._thread.is_alive():
+            if not self._started:
+                self._started = True
                 self._thread.start()
         self._sent.put((cs_id, pending, tuple(added), tuple(removed)))
 

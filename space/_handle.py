@@ -38,6 +38,7 @@ class Handle:
         strict: bool = False,
         writer: str | None = None,
         lifespan: float | None = None,
+        dispatch_thread: bool = True,
         _owns_session: bool = False,
     ) -> None:
         self.session = session
@@ -54,7 +55,7 @@ class Handle:
         self.prefixes = PrefixMap(prefixes)
         self._owns_session = _owns_session
         self._queriers = Queriers(session)  # the store's services, asked on declared queriers
-        self._dispatcher = Dispatcher(self._fetch_log)
+        self._dispatcher = Dispatcher(self._fetch_log, own_thread=dispatch_thread)
         self._subscriptions: set[Subscription] = set()
         self._watchdogs: list = []
 

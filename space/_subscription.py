@@ -3,7 +3,10 @@
 Zenoh callbacks only hand payloads to a queue; a dispatcher thread per
 `TripleSpace` orders them by sequence number, drops duplicates, fetches what
 was missed, and calls the user's callbacks. A slow callback therefore delays
-later changes but never blocks Zenoh.
+later changes but never blocks Zenoh. An owner that has a loop of its own (an
+agent) runs the dispatching itself instead (`Dispatcher(own_thread=False)`,
+`deliver`): one thread hand-off less per change, and the callbacks run on the
+thread that owns what they update.
 """
 
 from __future__ import annotations
@@ -208,15 +211,23 @@ class _Behind:
 
 
 class Dispatcher:
-    """The thread that delivers changes to every subscription of one `TripleSpace`."""
+    """Delivers changes to every subscription of one `TripleSpace`, on a thread of its own.
 
-    def __init__(self, fetch_log: Fetch) -> None:
+    Or, with `own_thread=False`, on the thread that calls `deliver`.
+    """
+
+    def __init__(self, fetch_log: Fetch, *, own_thread: bool = True) -> None:
         self._fetch_log = fetch_log
-        self._queue: queue.SimpleQueue[tuple[Subscription, object] | None] = queue.SimpleQueue()
+        self._queue: queue.SimpleQueue[tuple[Subscription | None, object] | None] = (
+            queue.SimpleQueue()
+        )
         self._subs: set[Subscription] = set()
         self._thread = threading.Thread(target=self._run, name="tspace-dispatch", daemon=True)
-        self._started = False
+        self._started = not own_thread  # a caller's thread delivers: none to start
         self._lock = threading.Lock()
+        self._out: list[tuple[Subscription | None, object]] = []  # to deliver, in order
+        self._held = 0.0  # when delivery started waiting for more parts
+        self._last = 0.0  # when the last item came, while delivery waits
 
     def feed(self, sub: Subscription) -> Callable[[zenoh.Sample], None]:
         """Return the Zenoh callback that feeds a subscription (it only enqueues).
@@ -268,41 +279,62 @@ class Dispatcher:
         with self._lock:
             self._subs.discard(sub)
 
+    def post(self, work: Callable[[], None]) -> None:
+        """Run `work` on the delivering thread, after the changes queued before it; any thread."""
+        self._queue.put((None, work))
+
     def close(self) -> None:
-        """Stop the thread after what is queued."""
+        """Stop the thread after what is queued (`deliver` then returns False)."""
+        self._queue.put(None)
         with self._lock:
             started = self._started
-        if started:
-            self._queue.put(None)
-            if threading.current_thread() is not self._thread:
-                self._thread.join(timeout=5)
+        if started and self._thread.is_alive() and threading.current_thread() is not self._thread:
+            self._thread.join(timeout=5)
 
     def _run(self) -> None:
-        out: list[tuple[Subscription, object]] = []  # what `receive` returned, to deliver
-        held = 0.0  # when delivery started waiting for more parts
-        while True:
-            try:
-                batch = [self._queue.get(timeout=IDLE if held else None)]
-            except queue.Empty:
-                batch = []  # nothing came, not even the end awaited: deliver
-            while batch and len(batch) < _BATCH:  # what is queued already is handled, delivered
-                try:
-                    batch.append(self._queue.get_nowait())
-                except queue.Empty:
-                    break
-            for item in batch:
-                if item is None:
-                    self._deliver(out)
-                    return
-                self._step(*item, out)
-            now = time.monotonic()
-            if batch and _waiting(out) and now - (held or now) < HOLD_MAX:
-                held = held or now
-                continue
-            self._deliver(out)
-            held = 0.0
+        while self.deliver(None):
+            pass
 
-    def _step(self, sub: Subscription, payload: object, out: list) -> None:
+    def deliver(self, timeout: float | None) -> bool:
+        """Handle what is queued, waiting up to `timeout` s (None: for ever) for a first item,
+        and call the callbacks of the changes it makes (unless they wait for more parts).
+
+        Called in a loop by the dispatcher's thread, or by the owner's (`own_thread=False`).
+        Returns False once closed.
+        """
+        held, wait = self._held, timeout
+        if held:  # waiting for more parts: delivered once none came for IDLE
+            left = IDLE - (time.monotonic() - self._last)
+            wait = max(0.0, left if timeout is None else min(left, timeout))
+        try:
+            batch = [self._queue.get(timeout=wait)]
+        except queue.Empty:
+            if not held or time.monotonic() - self._last < IDLE:
+                return True  # nothing came yet
+            batch = []  # nothing came for IDLE, not even the end awaited: deliver
+        while batch and len(batch) < _BATCH:  # what is queued already is handled, delivered
+            try:
+                batch.append(self._queue.get_nowait())
+            except queue.Empty:
+                break
+        out = self._out
+        for item in batch:
+            if item is None:
+                self._deliver(out)
+                return False
+            self._step(*item, out)
+        now = time.monotonic()
+        if batch and _waiting(out) and now - (held or now) < HOLD_MAX:
+            self._held, self._last = held or now, now
+            return True
+        self._deliver(out)
+        self._held = 0.0
+        return True
+
+    def _step(self, sub: Subscription | None, payload: object, out: list) -> None:
+        if sub is None:  # work posted
+            out.append((None, payload))
+            return
         with self._lock:
             alive = sub in self._subs
         if not alive:
@@ -338,10 +370,13 @@ class Dispatcher:
             if not (out and out[-1][0] is sub and sub.merge(out[-1][1], item)):
                 out.append((sub, item))
 
-    def _deliver(self, out: list[tuple[Subscription, object]]) -> None:
-        for sub in {sub for sub, _item in out}:
+    def _deliver(self, out: list[tuple[Subscription | None, object]]) -> None:
+        for sub in {sub for sub, _item in out if sub is not None}:
             sub.delivered()
         for sub, item in out:
+            if sub is None:
+                _run_work(item)  # type: ignore[arg-type]
+                continue
             with self._lock:
                 alive = sub in self._subs
             if not alive:
@@ -356,6 +391,13 @@ class Dispatcher:
         out.clear()
 
 
-def _waiting(out: list[tuple[Subscription, object]]) -> bool:
+def _waiting(out: list[tuple[Subscription | None, object]]) -> bool:
     """Return whether a subscription with changes to deliver waits for more of their parts."""
-    return any(sub.waiting for sub in {sub for sub, _item in out})
+    return any(sub.waiting for sub in {sub for sub, _item in out if sub is not None})
+
+
+def _run_work(work: Callable[[], None]) -> None:
+    try:
+        work()
+    except Exception:  # the poster's work must not stop delivery
+        log.exception("work posted to the dispatcher failed")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 
 import zenoh
 from zenoh import ext
@@ -154,6 +155,19 @@ class Watching(Handle):
             log.warning("malformed heartbeat on %s skipped", sample.key_expr)
             return
         self._dispatcher.catch_up(seq)
+
+    def deliver(self, timeout: float | None) -> bool:
+        """Run the callbacks of the changes that arrive within `timeout` s (None: for ever).
+
+        For a handle opened with `dispatch_thread=False`, whose owner calls it in its
+        loop: the callbacks then run on the owner's thread. Returns as soon as what
+        arrived is delivered (or, after `timeout`, nothing did); False once closed.
+        """
+        return self._dispatcher.deliver(timeout)
+
+    def post(self, work: Callable[[], None]) -> None:
+        """Run `work` where the callbacks run, after the changes already received; any thread."""
+        self._dispatcher.post(work)
 
     def unsubscribe(self, sub: Subscription) -> None:
         """Stop a subscription."""

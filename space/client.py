@@ -56,6 +56,7 @@ class TripleSpace(Reads, Watching):
         strict: bool = False,
         identity: Identity | None = None,
         lifespan: float | None = None,
+        dispatch_thread: bool = True,
     ) -> TripleSpace:
         """Open a session to the routers at `connect` and a handle on `space`.
 
@@ -66,7 +67,9 @@ class TripleSpace(Reads, Watching):
         (`space.load_identity`), every link is mutual TLS with its certificate,
         and writes go under its name.
         `lifespan`: the default lifespan in seconds of every write of this handle
-        (see `write`).
+        (see `write`). With `dispatch_thread=False` the subscriptions' callbacks run
+        on the thread that calls `deliver` in a loop (see `Watching.deliver`), not on
+        a thread of the handle's own.
 
         Raises:
             InputError: `space` is not a legal space name (checked before connecting).
@@ -86,6 +89,7 @@ class TripleSpace(Reads, Watching):
                 strict=strict,
                 writer=writer,
                 lifespan=lifespan,
+                dispatch_thread=dispatch_thread,
                 _owns_session=True,
             )
         except BaseException:

@@ -188,6 +188,21 @@ def test_subscribe_can_skip_its_own_changes(server, ts, space_name):
     assert seen[1].seq == seen[0].seq + 2  # after the one skipped, no gap to fill
 
 
+def test_without_a_dispatch_thread_changes_and_posted_work_run_where_deliver_is_called(
+    server, space_name
+):
+    with TripleSpace.open(server.endpoint, space=space_name, dispatch_thread=False) as ts:
+        seen: list[tuple[str, object]] = []
+        ts.subscribe(None, lambda c: seen.append((threading.current_thread().name, c.added)))
+        ts.write(ROBOT[:1])
+        wait_for(lambda: ts.deliver(0.05) and seen, what="the change")
+        ts.post(lambda: seen.append((threading.current_thread().name, "work")))
+        wait_for(lambda: ts.deliver(0.05) and len(seen) >= 2, what="the work")
+        me = threading.current_thread().name
+        assert seen == [(me, ROBOT[:1]), (me, "work")]  # on this thread
+    assert not ts.deliver(0)  # closed
+
+
 def test_no_store_means_space_unavailable_within_timeout(tmp_path):
     from conftest import free_port
 
