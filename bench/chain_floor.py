@@ -32,6 +32,7 @@ import argparse
 import queue
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -53,9 +54,15 @@ STAGE_NT = to_nt(STAGE)
 
 
 def relay(endpoint: str, role: str) -> None:
-    """Run one relay: on stage n-1 write stage n (`role` "2" or "3"), or watch (`"0"`)."""
+    """Run one relay: on stage n-1 write stage n (`role` "2" or "3"), or watch (`"0"`).
+
+    As an agent does: changes delivered on the relay's own thread where the library
+    can (`dispatch_thread=False`), else on the handle's dispatcher thread.
+    """
     step = int(role)
-    with TripleSpace.open(endpoint, space=SPACE, agent=f"relay{role}") as ts:
+    own = hasattr(TripleSpace, "deliver")  # an older tree (`--old`) has no such API
+    options = {"dispatch_thread": False} if own else {}
+    with TripleSpace.open(endpoint, space=SPACE, agent=f"relay{role}", **options) as ts:
 
         def on_change(change: object) -> None:
             if step == 0:
@@ -66,7 +73,13 @@ def relay(endpoint: str, role: str) -> None:
 
         ts.subscribe((S, STAGE, None), on_change)
         print("ready", flush=True)
-        sys.stdin.read()  # until the bench closes our stdin
+        closed = threading.Event()  # the bench closed our stdin
+        threading.Thread(target=lambda: (sys.stdin.read(), closed.set()), daemon=True).start()
+        while not closed.is_set():
+            if own:
+                ts.deliver(0.1)
+            else:
+                closed.wait(0.1)
 
 
 def zenoh_relay(endpoint: str, role: str) -> None:
