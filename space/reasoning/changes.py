@@ -53,6 +53,16 @@ class ChangeLog:
         if t not in before:
             before[t] = _STATES[t in self._triples][t in self._asserted]
 
+    def replaced(self, old: T, was: tuple | None, new: T, by: tuple[int, tuple[T, ...]]) -> None:
+        """Note and journal a production firing that drops `old` (asserted, `was` its rule)
+        and asserts `new` (neither present nor asserted): `touch` and the journal, in one call."""
+        before = self._before
+        if old not in before:
+            before[old] = _STATES[True][True]
+        if new not in before:
+            before[new] = _STATES[False][False]
+        self.journal += (False, old, was, True, new, by)
+
     def fresh(self, triples: list[T]) -> Delta:
         """Return the `delta` of a fresh engine's load of monotonic rules: `triples`, all new.
 

@@ -32,7 +32,9 @@ class CompiledRule:
 
     `drops` and `removes` index the premises (the matched triples, in body order),
     not the body items. A rule is `production` when it drops, removes or uses
-    `noValue` (any builtin that is not monotonic).
+    `noValue` (any builtin that is not monotonic). It `replaces` when a firing only
+    drops one premise and asserts one triple (no test, no other action): the engine's
+    shortest firing path (`RuleEngine._replace`).
     """
 
     rule: Rule
@@ -45,6 +47,7 @@ class CompiledRule:
     actions: tuple[tuple[Builtin, ArgsFn], ...]
     guards: tuple[tuple[Builtin, ArgsFn], ...]
     start: Trigger | None = None  # for a body without triples: its join, run at load
+    replaces: bool = False
 
 
 Entry = tuple[CompiledRule | None, Trigger]
@@ -124,17 +127,30 @@ class RuleIndex:
             if isinstance(item, Pattern):
                 premise_of[index] = len(premise_of)
         heads = [i for i in rule.head if isinstance(i, Call)]
+        drops = _targets(heads, Effect.DROP, premise_of)
+        removes = _targets(heads, Effect.REMOVE, premise_of)
+        replaces = (
+            code.production
+            and not rule.backward
+            and len(drops) == 1
+            and not removes
+            and not code.head_args
+            and not code.body_args
+            and len(heads) == 1
+            and sum(isinstance(i, Pattern) for i in rule.head) == 1
+        )
         compiled = CompiledRule(
             rule=rule,
             label=rule.label,
             order=order,
             production=code.production,
             heads=bind(code.heads),
-            drops=_targets(heads, Effect.DROP, premise_of),
-            removes=_targets(heads, Effect.REMOVE, premise_of),
+            drops=drops,
+            removes=removes,
             actions=tuple((_builtin(rule.head[i]), bind(f)) for i, f in code.head_args.items()),
             guards=tuple((_builtin(rule.body[i]), bind(f)) for i, f in code.body_args.items()),
             start=None if code.start is None else bind(code.start),
+            replaces=replaces,
         )
         for index, factory in code.triggers.items():
             item = rule.body[index]

@@ -336,9 +336,14 @@ class RuleEngine(EngineReads):
     def _run_agenda(self) -> None:
         """Fire activations one at a time while their match still holds."""
         triples, ctx, agenda, fire = self._store.triples, self._ctx, self._agenda, self._fire
+        replace = self._replace
         while (activation := agenda.pop()) is not None:
             compiled, (premises, bindings) = activation
             if not triples.issuperset(premises):
+                continue
+            if compiled.replaces:
+                agenda.count(compiled)
+                replace(compiled, premises, bindings)
                 continue
             guards = compiled.guards
             if guards and any(b.run(ctx, args(bindings)) is None for b, args in guards):
@@ -369,6 +374,37 @@ class RuleEngine(EngineReads):
         asserted = tuple(t for t in heads if t[2] not in functors) if functors else heads
         retracted = dropped + removed if removed else dropped
         self._firings.append(Firing(compiled.label, premises, asserted, retracted, self._triple))
+
+    def _replace(self, compiled: CompiledRule, premises: tuple[T, ...], bindings: tuple) -> None:
+        """Fire a rule that `replaces` one premise by its head: `_fire`, one triple out and
+        one in, without its general steps (no support to walk, no lists, one journal call).
+
+        `_fire` when the dropped triple is not a plain asserted leaf (it supports or has
+        a derivation) or the head is not new: their general steps are then the point.
+        """
+        (head,) = compiled.heads(bindings)
+        old = premises[compiled.drops[0]]
+        asserted, support, triples = self._asserted, self._support, self._store.triples
+        if (
+            old not in asserted
+            or head in triples
+            or head in asserted
+            or old in support.dependents
+            or old in support.derivations
+        ):
+            self._fire(compiled, premises, bindings)
+            return
+        by = (compiled.order, premises)
+        asserted_by = self._asserted_by
+        self._log.replaced(old, asserted_by.pop(old, None), head, by)
+        asserted.discard(old)
+        asserted.add(head)
+        asserted_by[head] = by
+        self._store.replace(old, head)
+        self._propagate([head])
+        functors = self.terms.functors
+        made = () if functors and head[2] in functors else (head,)
+        self._firings.append(Firing(compiled.label, premises, made, (old,), self._triple))
 
     def _withdraw(self) -> None:
         """Retract what backward rules with noValue concluded from matches that hold no more."""

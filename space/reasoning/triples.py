@@ -97,6 +97,23 @@ class TripleStore:
         """Tell whether some triple matches; None matches anything."""
         return next(self.match(s, p, o), None) is not None
 
+    def replace(self, old: T, new: T) -> None:
+        """Remove `old` (in the store) and add `new` (not in it): a production firing's drop
+        and assertion. The new triple is indexed first, so that a key whose only triple
+        is replaced (a setting's POS entry) keeps its dictionary instead of a new one."""
+        triples = self.triples
+        triples.discard(old)
+        triples.add(new)
+        s, p, o = new
+        a, b, c = old
+        spo, pos, osp = self.spo, self.pos, self.osp
+        _put(spo, s, p, o)
+        _drop(spo, a, b, c)
+        _put(pos, p, o, s)
+        _drop(pos, b, c, a)
+        _put(osp, o, s, p)
+        _drop(osp, c, a, b)
+
     def match(self, s: Id | None, p: Id | None, o: Id | None) -> Iterator[T]:
         """Yield the triples that match; None matches anything."""
         if s is not None:
