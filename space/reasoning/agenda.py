@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import heapq
 from collections import Counter, deque
+from collections.abc import Iterable
 
 from space.reasoning.compile import CompiledRule
 from space.reasoning.errors import RuleLoopError
@@ -39,23 +40,28 @@ class Agenda:
     def __bool__(self) -> bool:
         return bool(self._orders)
 
-    def push(self, rule: CompiledRule, match: Match) -> None:
-        """Queue a match, unless the same match is already waiting."""
-        order = rule.order
-        pending = self._pending
-        premises = match[0]
-        size = len(pending)
-        held = pending.setdefault(premises, order)
-        if len(pending) == size:  # some rule waits on these premises already
-            if held == order or (type(held) is set and order in held):
-                return
-            pending[premises] = {held, order} if type(held) is int else held | {order}
-        waiting = self._waiting.get(order)
-        if waiting is None:
-            self._waiting[order] = [rule, match]
-            heapq.heappush(self._orders, order)
-        else:
-            waiting.append(match)
+    def push(self, activations: Iterable[Activation]) -> None:
+        """Queue matches, each unless the same match is already waiting.
+
+        All a join found in one call (a batch's: one per rule; `zip(repeat(rule), matches)`
+        for one rule's), so that a batch of N rules costs one call, not N.
+        """
+        pending, waiting_of, orders = self._pending, self._waiting, self._orders
+        for rule, match in activations:
+            order = rule.order
+            premises = match[0]
+            size = len(pending)
+            held = pending.setdefault(premises, order)
+            if len(pending) == size:  # some rule waits on these premises already
+                if held == order or (type(held) is set and order in held):
+                    continue
+                pending[premises] = {held, order} if type(held) is int else held | {order}
+            waiting = waiting_of.get(order)
+            if waiting is None:
+                waiting_of[order] = [rule, match]
+                heapq.heappush(orders, order)
+            else:
+                waiting.append(match)
 
     def pop(self) -> Activation | None:
         """Take the next activation (the caller checks it still holds), or None when empty."""

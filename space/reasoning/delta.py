@@ -3,11 +3,9 @@
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from space.reasoning.triples import T
 from space.terms import Triple
 
 
@@ -25,40 +23,38 @@ class TripleChange(NamedTuple):
     origin: Origin
 
 
-class Firing:
+NEW_FIRING = tuple.__new__
+
+
+class Firing(tuple):
     """One firing of a production rule: what matched (`triggers`), and what it changed.
 
-    The triples are decoded when first read: most callers only count firings.
+    The triples are decoded when first read: most callers only count firings. A tuple
+    `(rule, triggers, asserted, retracted, decode)`, the triples encoded, made in C
+    (`NEW_FIRING(Firing, (...))`): a Python `__init__` was a tenth of a short firing.
     """
 
-    __slots__ = ("_asserted", "_decode", "_retracted", "_triggers", "rule")
+    __slots__ = ()
 
-    def __init__(
-        self,
-        rule: str,
-        triggers: tuple[T, ...],
-        asserted: tuple[T, ...],
-        retracted: tuple[T, ...],
-        decode: Callable[[T], Triple],
-    ) -> None:
-        self.rule = rule
-        self._triggers, self._asserted, self._retracted = triggers, asserted, retracted
-        self._decode = decode
+    @property
+    def rule(self) -> str:
+        """Return the label of the rule that fired."""
+        return self[0]
 
     @property
     def triggers(self) -> tuple[Triple, ...]:
         """Return the triples the rule's body matched, in body order."""
-        return tuple(map(self._decode, self._triggers))
+        return tuple(map(self[4], self[1]))
 
     @property
     def asserted(self) -> tuple[Triple, ...]:
         """Return the triples the rule's head asserted."""
-        return tuple(map(self._decode, self._asserted))
+        return tuple(map(self[4], self[2]))
 
     @property
     def retracted(self) -> tuple[Triple, ...]:
         """Return the triples the rule dropped or removed."""
-        return tuple(map(self._decode, self._retracted))
+        return tuple(map(self[4], self[3]))
 
     def __repr__(self) -> str:
         return f"Firing({self.rule!r}, triggers={self.triggers}, asserted={self.asserted})"

@@ -11,6 +11,7 @@ each firing's changes fully applied (closure included) before the next.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
+from itertools import repeat
 from pathlib import Path
 
 from rdflib import OWL, BNode, Graph, URIRef
@@ -25,7 +26,7 @@ from space.reasoning.bulk import read_ids
 from space.reasoning.changes import ChangeLog
 from space.reasoning.checks import check_rule, mark_shared_names
 from space.reasoning.compile import CompiledRule, RuleIndex
-from space.reasoning.delta import Delta, Firing
+from space.reasoning.delta import NEW_FIRING, Delta, Firing
 from space.reasoning.errors import RuleError, RuleLoopError
 from space.reasoning.forms import value_patterns
 from space.reasoning.joins import Match, environment
@@ -250,8 +251,7 @@ class RuleEngine(EngineReads):
                 continue
             compiled.start(0, 0, 0, out)
             if compiled.production:
-                for match in out:
-                    self._agenda.push(compiled, match)
+                self._agenda.push(zip(repeat(compiled), out))
             else:
                 self._derive(compiled, out, queue)
             out.clear()
@@ -272,12 +272,10 @@ class RuleEngine(EngineReads):
                     continue
                 if compiled is None:  # a batch of production rules (`sharing`)
                     if self._production:
-                        for rule, match in out:
-                            agenda.push(rule, match)
+                        agenda.push(out)
                 elif compiled.production:
                     if self._production:
-                        for match in out:
-                            agenda.push(compiled, match)
+                        agenda.push(zip(repeat(compiled), out))
                 else:
                     self._derive(compiled, out, queue)
                 out.clear()
@@ -329,8 +327,7 @@ class RuleEngine(EngineReads):
         for s, p, o in gone:
             for compiled, trigger in self._index.on_removed(p):
                 trigger(s, p, o, out)
-                for match in out:
-                    self._agenda.push(compiled, match)
+                self._agenda.push(zip(repeat(compiled), out))
                 out.clear()
 
     def _run_agenda(self) -> None:
@@ -373,7 +370,8 @@ class RuleEngine(EngineReads):
         functors = self.terms.functors
         asserted = tuple(t for t in heads if t[2] not in functors) if functors else heads
         retracted = dropped + removed if removed else dropped
-        self._firings.append(Firing(compiled.label, premises, asserted, retracted, self._triple))
+        record = (compiled.label, premises, asserted, retracted, self._triple)
+        self._firings.append(NEW_FIRING(Firing, record))
 
     def _replace(self, compiled: CompiledRule, premises: tuple[T, ...], bindings: tuple) -> None:
         """Fire a rule that `replaces` one premise by its head: `_fire`, one triple out and
@@ -404,7 +402,8 @@ class RuleEngine(EngineReads):
         self._propagate([head])
         functors = self.terms.functors
         made = () if functors and head[2] in functors else (head,)
-        self._firings.append(Firing(compiled.label, premises, made, (old,), self._triple))
+        record = (compiled.label, premises, made, (old,), self._triple)
+        self._firings.append(NEW_FIRING(Firing, record))
 
     def _withdraw(self) -> None:
         """Retract what backward rules with noValue concluded from matches that hold no more."""
