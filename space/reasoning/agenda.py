@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import heapq
-from collections import Counter, deque
-from collections.abc import Iterable
+from collections import Counter
+from collections.abc import Iterable, Sequence
 
 from space.reasoning.compile import CompiledRule
+from space.reasoning.delta import Firing
 from space.reasoning.errors import RuleLoopError
 from space.reasoning.joins import Match
 from space.reasoning.triples import T
@@ -34,8 +35,7 @@ class Agenda:
         self._orders: list[int] = []  # a heap
         self._waiting: dict[int, list] = {}  # order -> [rule, match, match...]
         self._pending: dict[tuple[T, ...], int | set[int]] = {}
-        self._total = 0
-        self._recent: deque[str] = deque(maxlen=max(10, max_firings // 10))
+
 
     def __bool__(self) -> bool:
         return bool(self._orders)
@@ -81,29 +81,24 @@ class Agenda:
             self._pending[premises] = held.pop() if len(held) == 1 else held
         return stack[0], match
 
-    def count(self, rule: CompiledRule) -> None:
-        """Count one firing.
-
-        Raises:
-            RuleLoopError: this update fired more than `max_firings` times.
-        """
-        self._total += 1
-        self._recent.append(rule.label)
-        if self._total > self.max_firings:
-            window = Counter(self._recent)
-            names = tuple(name for name, _ in window.most_common())
-            listed = ", ".join(f"{n} ({window[n]}x)" for n in names)
-            firings = "firing" if self.max_firings == 1 else "firings"
-            raise RuleLoopError(
-                f"rules keep firing: more than {self.max_firings} {firings} in one update;"
-                f" the last {len(self._recent)} were {listed}",
-                names,
-            )
+    def loop(self, firings: Sequence[Firing], rule: CompiledRule) -> RuleLoopError:
+        """Return the error for an update about to fire `rule` after `max_firings` firings
+        (the engine counts them: its list of this update's `firings`), naming the last ones."""
+        window = max(10, self.max_firings // 10)
+        recent = [f.rule for f in firings[max(0, len(firings) - window + 1) :]] + [rule.label]
+        counts = Counter(recent)
+        names = tuple(name for name, _ in counts.most_common())
+        listed = ", ".join(f"{n} ({counts[n]}x)" for n in names)
+        firings_ = "firing" if self.max_firings == 1 else "firings"
+        return RuleLoopError(
+            f"rules keep firing: more than {self.max_firings} {firings_} in one update;"
+            f" the last {len(recent)} were {listed}",
+            names,
+        )
 
     def reset(self) -> None:
-        """Forget pending activations and firing counts, before an update."""
+        """Forget pending activations, before an update."""
         self._orders.clear()
         self._waiting.clear()
         self._pending.clear()
-        self._total = 0
-        self._recent.clear()
+

@@ -104,42 +104,60 @@ class ChangeLog:
         return added, removed
 
     def delta(self, firings: tuple[Firing, ...]) -> Delta:
-        """Return the net change since `begin`."""
-        added: list[TripleChange] = []
-        removed: list[TripleChange] = []
-        by_rules: tuple[list[Triple], list[Triple]] = ([], [])
-        inferred: tuple[list[Triple], list[Triple]] = ([], [])
-        triples, asserted, expected = self._triples, self._asserted, self._expected
+        """Return the net change since `begin`: each touched triple's plan (`_PLANS`) by its
+        states before and now, and what the caller meant for it."""
+        out: tuple[list, ...] = ([], [], [], [], [], [])
+        triples, asserted, expected = self._triples, self._asserted, self._expected.get
         functors, hidden, shown = self._terms.functors, self._terms.hidden, self._terms.shown
         filtered = bool(functors or hidden)
-        names = self._terms.names  # decoded here, not by a call per triple
-        for t, (was_present, was_asserted) in self._before.items():
-            is_present, is_asserted = t in triples, t in asserted
-            # Checked before the net change: a caller's triple that rules took
-            # away in the same update (a loaded one, say) is no net change, but
-            # the caller must be told, or it keeps the triple.
-            by_rule = is_asserted != expected.get(t, was_asserted)
-            if is_present == was_present and is_asserted == was_asserted and not by_rule:
+        names, plans = self._terms.names, _PLANS  # decoded here, not by a call per triple
+        for t, was in self._before.items():
+            plan = plans[was, t in triples, t in asserted, expected(t)]
+            if plan is None:
                 continue
             if filtered and (t[2] in functors or (hidden and not shown(t))):
                 continue
             s, p, o = t
             triple = (names[s], names[p], names[o])
-            if is_present != was_present:
-                now = is_asserted if is_present else was_asserted
-                change = _new_change(TripleChange, (triple, _ASSERTED if now else _INFERRED))
-                (added if is_present else removed).append(change)
-            if by_rule:
-                by_rules[0 if is_asserted else 1].append(triple)
-            was_inferred = was_present and not was_asserted
-            if (is_present and not is_asserted) != was_inferred:
-                inferred[1 if was_inferred else 0].append(triple)
-        return Delta(
-            added=tuple(added),
-            removed=tuple(removed),
-            asserted_added=tuple(by_rules[0]),
-            asserted_removed=tuple(by_rules[1]),
-            inferred_added=tuple(inferred[0]),
-            inferred_removed=tuple(inferred[1]),
-            firings=firings,
-        )
+            change, origin, by_rule, inferred = plan
+            if change >= 0:
+                out[change].append(_new_change(TripleChange, (triple, origin)))
+            if by_rule >= 0:
+                out[by_rule].append(triple)
+            if inferred >= 0:
+                out[inferred].append(triple)
+        return Delta(*map(tuple, out), firings=firings)  # type: ignore[arg-type]
+
+
+def _plan(
+    was_present: bool, was_asserted: bool, is_present: bool, is_asserted: bool, meant: bool | None
+) -> tuple[int, Origin | None, int, int] | None:
+    """Return where a touched triple goes in a `Delta` (the indexes of its fields in order,
+    -1 for none): as a change, with its origin; as asserted or retracted by rules; as
+    inferred or no longer. None when it goes nowhere. `meant`: True if the caller
+    asserted it, False if the caller retracted it, None if neither."""
+    # Checked before the net change: a caller's triple that rules took away in the same
+    # update (a loaded one, say) is no net change, but the caller must be told, or it
+    # keeps the triple.
+    by_rule = is_asserted != (was_asserted if meant is None else meant)
+    if is_present == was_present and is_asserted == was_asserted and not by_rule:
+        return None
+    change, origin = -1, None
+    if is_present != was_present:
+        now = is_asserted if is_present else was_asserted
+        change, origin = (0 if is_present else 1), (_ASSERTED if now else _INFERRED)
+    rule = (2 if is_asserted else 3) if by_rule else -1
+    was_inferred = was_present and not was_asserted
+    is_inferred = is_present and not is_asserted
+    inferred = (5 if was_inferred else 4) if is_inferred != was_inferred else -1
+    return change, origin, rule, inferred
+
+
+_PLANS = {
+    (was, present, now, meant): _plan(*was, present, now, meant)
+    for was in (_STATES[0][0], _STATES[0][1], _STATES[1][0], _STATES[1][1])
+    for present in (False, True)
+    for now in (False, True)
+    for meant in (None, False, True)
+}
+"""`_plan` of every (before, present now, asserted now, meant) a touched triple can have."""

@@ -332,25 +332,26 @@ class RuleEngine(EngineReads):
 
     def _run_agenda(self) -> None:
         """Fire activations one at a time while their match still holds."""
-        triples, ctx, agenda, fire = self._store.triples, self._ctx, self._agenda, self._fire
-        replace = self._replace
+        triples, ctx, agenda = self._store.triples, self._ctx, self._agenda
+        firings, limit = self._firings, agenda.max_firings  # this update's: its count
         while (activation := agenda.pop()) is not None:
             compiled, (premises, bindings) = activation
             if not triples.issuperset(premises):
                 continue
+            if not compiled.replaces:  # which has no guard and is not held
+                guards = compiled.guards
+                if guards and any(b.run(ctx, args(bindings)) is None for b, args in guards):
+                    continue
+                held = self._withdrawals
+                if held is not None and compiled.order in held.orders:
+                    if held.known(compiled, premises, bindings):
+                        continue  # woken again on a match that concluded already
+            if len(firings) >= limit:
+                raise agenda.loop(firings, compiled)
             if compiled.replaces:
-                agenda.count(compiled)
-                replace(compiled, premises, bindings)
-                continue
-            guards = compiled.guards
-            if guards and any(b.run(ctx, args(bindings)) is None for b, args in guards):
-                continue
-            held = self._withdrawals
-            if held is not None and compiled.order in held.orders:
-                if held.known(compiled, premises, bindings):
-                    continue  # woken again on a match that concluded already
-            agenda.count(compiled)
-            fire(compiled, premises, bindings)
+                self._replace(compiled, premises, bindings)
+            else:
+                self._fire(compiled, premises, bindings)
 
     def _fire(self, compiled: CompiledRule, premises: tuple[T, ...], bindings: tuple) -> None:
         heads = compiled.heads(bindings)
