@@ -386,8 +386,7 @@ class RuleEngine(EngineReads):
         asserted, support, triples = self._asserted, self._support, self._store.triples
         if (
             old not in asserted
-            or head in triples
-            or head in asserted
+            or head in triples  # (what is asserted is in the store)
             or old in support.dependents
             or old in support.derivations
         ):

@@ -100,15 +100,20 @@ class TripleStore:
     def replace(self, old: T, new: T) -> None:
         """Remove `old` (in the store) and add `new` (not in it): a production firing's drop
         and assertion. The new triple is indexed first, so that a key whose only triple
-        is replaced (a setting's POS entry) keeps its dictionary instead of a new one."""
+        is replaced (a setting's POS entry) keeps its dictionary instead of a new one; a
+        new object for a subject and predicate with one replaces its SPO leaf."""
         triples = self.triples
         triples.discard(old)
         triples.add(new)
         s, p, o = new
         a, b, c = old
         spo, pos, osp = self.spo, self.pos, self.osp
-        _put(spo, s, p, o)
-        _drop(spo, a, b, c)
+        objects = spo[s].get(p) if s == a and p == b else None
+        if objects is not None and len(objects) == 1:  # (c,) or {c}
+            spo[s][p] = (o,)
+        else:
+            _put(spo, s, p, o)
+            _drop(spo, a, b, c)
         _put(pos, p, o, s)
         _drop(pos, b, c, a)
         _put(osp, o, s, p)
