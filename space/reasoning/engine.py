@@ -381,7 +381,8 @@ class RuleEngine(EngineReads):
         `_fire` when the dropped triple is not a plain asserted leaf (it supports or has
         a derivation) or the head is not new: their general steps are then the point.
         """
-        (head,) = compiled.heads(bindings)
+        made = compiled.heads(bindings)
+        (head,) = made
         old = premises[compiled.drops[0]]
         asserted, support, triples = self._asserted, self._support, self._store.triples
         if (
@@ -401,7 +402,8 @@ class RuleEngine(EngineReads):
         self._store.replace(old, head)
         self._propagate([head])
         functors = self.terms.functors
-        made = () if functors and head[2] in functors else (head,)
+        if functors and head[2] in functors:
+            made = ()
         record = (compiled.label, premises, made, (old,), self._triple)
         self._firings.append(NEW_FIRING(Firing, record))
 
