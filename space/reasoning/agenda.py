@@ -36,7 +36,6 @@ class Agenda:
         self._waiting: dict[int, list] = {}  # order -> [rule, match, match...]
         self._pending: dict[tuple[T, ...], int | set[int]] = {}
 
-
     def __bool__(self) -> bool:
         return bool(self._orders)
 
@@ -101,4 +100,3 @@ class Agenda:
         self._orders.clear()
         self._waiting.clear()
         self._pending.clear()
-
