@@ -19,21 +19,24 @@ Activation = tuple[CompiledRule, Match]
 class Agenda:
     """Queue activations once per match and stop a rule set that keeps firing.
 
-    The waiting matches of each rule are a stack (the most recent on top) behind
-    the rule itself, and a heap holds the orders of the rules with some waiting:
-    the heap moves when a rule gets its first match or loses its last, not on
-    every match. A match waits once: `_pending` maps its premises to the order of
-    the rule that waits on them (a set of orders in the rare case of two rules
-    with equal premises), so a push keeps no new tuple alive for the collector.
+    The waiting matches of each rule are a stack (the most recent on top), a match
+    alone while it is the only one (most rules wait on one at a time: no list made),
+    and a heap holds the orders of the rules with some waiting: the heap moves when a
+    rule gets its first match or loses its last, not on every match. A match waits
+    once: `_pending` maps its premises to the order of the rule that waits on them (a
+    set of orders in the rare case of two rules with equal premises), so a push keeps
+    no new tuple alive for the collector.
 
     Args:
         max_firings: how many firings one update may take before it is a loop.
+        rules: the engine's rules, each at its order.
     """
 
-    def __init__(self, max_firings: int) -> None:
+    def __init__(self, max_firings: int, rules: Sequence[CompiledRule]) -> None:
         self.max_firings = max_firings
+        self._rules = rules
         self._orders: list[int] = []  # a heap
-        self._waiting: dict[int, list] = {}  # order -> [rule, match, match...]
+        self._waiting: dict[int, Match | list[Match]] = {}  # order -> match or stack
         self._pending: dict[tuple[T, ...], int | set[int]] = {}
 
     def __bool__(self) -> bool:
@@ -57,10 +60,12 @@ class Agenda:
                 pending[premises] = {held, order} if type(held) is int else held | {order}
             waiting = waiting_of.get(order)
             if waiting is None:
-                waiting_of[order] = [rule, match]
+                waiting_of[order] = match
                 heapq.heappush(orders, order)
-            else:
+            elif type(waiting) is list:
                 waiting.append(match)
+            else:
+                waiting_of[order] = [waiting, match]
 
     def pop(self) -> Activation | None:
         """Take the next activation (the caller checks it still holds), or None when empty."""
@@ -68,9 +73,14 @@ class Agenda:
         if not orders:
             return None
         order = orders[0]
-        stack = self._waiting[order]
-        match = stack.pop()
-        if len(stack) == 1:
+        waiting = self._waiting[order]
+        if type(waiting) is list:
+            match = waiting.pop()
+            if not waiting:
+                del self._waiting[order]
+                heapq.heappop(orders)
+        else:
+            match = waiting
             del self._waiting[order]
             heapq.heappop(orders)
         premises = match[0]
@@ -78,7 +88,7 @@ class Agenda:
         if type(held) is set:
             held.discard(order)
             self._pending[premises] = held.pop() if len(held) == 1 else held
-        return stack[0], match
+        return self._rules[order], match
 
     def loop(self, firings: Sequence[Firing], rule: CompiledRule) -> RuleLoopError:
         """Return the error for an update about to fire `rule` after `max_firings` firings

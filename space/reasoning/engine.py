@@ -94,7 +94,7 @@ class RuleEngine(EngineReads):
         self._asserted: set[T] = set()
         self._asserted_by: dict[T, tuple[int, tuple[T, ...]]] = {}
         self._support = Support()
-        self._agenda = Agenda(max_firings)
+        self._agenda = Agenda(max_firings, self._compiled)  # a rule's order is its index
         self._log = ChangeLog(self.terms, self._store, self._asserted)
         self._firings: list[Firing] = []
         # Decodes a Firing's triples when read; bound once, not per firing.
