@@ -26,8 +26,9 @@ from space.reasoning.bulk import read_ids
 from space.reasoning.changes import ChangeLog
 from space.reasoning.checks import check_rule, mark_shared_names
 from space.reasoning.compile import CompiledRule, RuleIndex
-from space.reasoning.delta import NEW_FIRING, Delta, Firing
+from space.reasoning.delta import Delta, Firing
 from space.reasoning.errors import RuleError, RuleLoopError
+from space.reasoning.firing import EngineFirings
 from space.reasoning.forms import value_patterns
 from space.reasoning.joins import Match, environment
 from space.reasoning.owl import owl_rules
@@ -42,7 +43,7 @@ from space.reasoning.withdraw import Withdrawals, withdrawable
 from space.terms import Triple
 
 
-class RuleEngine(EngineReads):
+class RuleEngine(EngineReads, EngineFirings):
     """Keep a set of triples closed under rules; update it incrementally.
 
     Args:
@@ -97,6 +98,7 @@ class RuleEngine(EngineReads):
         self._agenda = Agenda(max_firings, self._compiled)  # a rule's order is its index
         self._log = ChangeLog(self.terms, self._store, self._asserted)
         self._firings: list[Firing] = []
+        self._out: list[Match] = []  # what a join finds, for `_replace`
         # Decodes a Firing's triples when read; bound once, not per firing.
         self._triple: Callable[[T], Triple] = self.terms.triple  # type: ignore[assignment]
         self._production = True
@@ -260,7 +262,7 @@ class RuleEngine(EngineReads):
 
     def _propagate(self, queue: list[T]) -> None:
         """Run the joins each new triple starts until nothing new is derived."""
-        agenda, starts = self._agenda, self._index.starts
+        starts, take = self._index.starts, self._take
         out: list[Match] = []
         position = 0
         while position < len(queue):
@@ -268,17 +270,21 @@ class RuleEngine(EngineReads):
             position += 1
             for compiled, trigger in starts(p, o):
                 trigger(s, p, o, out)
-                if not out:
-                    continue
-                if compiled is None:  # a batch of production rules (`sharing`)
-                    if self._production:
-                        agenda.push(out)
-                elif compiled.production:
-                    if self._production:
-                        agenda.push(zip(repeat(compiled), out))
-                else:
-                    self._derive(compiled, out, queue)
-                out.clear()
+                if out:
+                    take(compiled, out, queue)
+
+    def _take(self, compiled: CompiledRule | None, out: list, queue: list[T]) -> None:
+        """Take what a join found (and empty `out`): production matches wait on the agenda,
+        a monotonic rule's conclusions are derived, those new to the state onto `queue`."""
+        if compiled is None:  # a batch of production rules (`sharing`)
+            if self._production:
+                self._agenda.push(out)
+        elif compiled.production:
+            if self._production:
+                self._agenda.push(zip(repeat(compiled), out))
+        else:
+            self._derive(compiled, out, queue)
+        out.clear()
 
     def _derive(self, compiled: CompiledRule, matches: list[Match], queue: list[T]) -> None:
         """Record what a monotonic rule concludes from `matches`; queue the heads new to the state.
@@ -329,83 +335,6 @@ class RuleEngine(EngineReads):
                 trigger(s, p, o, out)
                 self._agenda.push(zip(repeat(compiled), out))
                 out.clear()
-
-    def _run_agenda(self) -> None:
-        """Fire activations one at a time while their match still holds."""
-        triples, ctx, agenda = self._store.triples, self._ctx, self._agenda
-        firings, limit = self._firings, agenda.max_firings  # this update's: its count
-        while (activation := agenda.pop()) is not None:
-            compiled, (premises, bindings) = activation
-            if not triples.issuperset(premises):
-                continue
-            if not compiled.replaces:  # which has no guard and is not held
-                guards = compiled.guards
-                if guards and any(b.run(ctx, args(bindings)) is None for b, args in guards):
-                    continue
-                held = self._withdrawals
-                if held is not None and compiled.order in held.orders:
-                    if held.known(compiled, premises, bindings):
-                        continue  # woken again on a match that concluded already
-            if len(firings) >= limit:
-                raise agenda.loop(firings, compiled)
-            if compiled.replaces:
-                self._replace(compiled, premises, bindings)
-            else:
-                self._fire(compiled, premises, bindings)
-
-    def _fire(self, compiled: CompiledRule, premises: tuple[T, ...], bindings: tuple) -> None:
-        heads = compiled.heads(bindings)
-        # Most production rules only drop: build no empty lists, no tuples twice.
-        pick = premises.__getitem__
-        dropped = tuple(map(pick, compiled.drops)) if compiled.drops else ()
-        removed = tuple(map(pick, compiled.removes)) if compiled.removes else ()
-        for builtin, args in compiled.actions:
-            builtin.act(self._ctx, args(bindings))
-        if dropped:
-            self._unassert(dropped, notify=False)
-        if removed:
-            self._unassert(removed, notify=True)
-        self._assert(heads, (compiled.order, premises))
-        if self._withdrawals is not None:
-            self._withdrawals.note(compiled, premises, bindings, heads, self._asserted_by)
-        functors = self.terms.functors
-        asserted = tuple(t for t in heads if t[2] not in functors) if functors else heads
-        retracted = dropped + removed if removed else dropped
-        record = (compiled.label, premises, asserted, retracted, self._triple)
-        self._firings.append(NEW_FIRING(Firing, record))
-
-    def _replace(self, compiled: CompiledRule, premises: tuple[T, ...], bindings: tuple) -> None:
-        """Fire a rule that `replaces` one premise by its head: `_fire`, one triple out and
-        one in, without its general steps (no support to walk, no lists, one journal call).
-
-        `_fire` when the dropped triple is not a plain asserted leaf (it supports or has
-        a derivation) or the head is not new: their general steps are then the point.
-        """
-        made = compiled.heads(bindings)
-        (head,) = made
-        old = premises[compiled.drops[0]]
-        asserted, support, triples = self._asserted, self._support, self._store.triples
-        if (
-            old not in asserted
-            or head in triples  # (what is asserted is in the store)
-            or old in support.dependents
-            or old in support.derivations
-        ):
-            self._fire(compiled, premises, bindings)
-            return
-        by = (compiled.order, premises)
-        asserted_by = self._asserted_by
-        self._log.replaced(old, asserted_by.pop(old, None), head, by)
-        asserted.discard(old)
-        asserted.add(head)
-        asserted_by[head] = by
-        self._store.replace(old, head)
-        self._propagate([head])
-        functors = self.terms.functors
-        if functors and head[2] in functors:
-            made = ()
-        record = (compiled.label, premises, made, (old,), self._triple)
-        self._firings.append(NEW_FIRING(Firing, record))
 
     def _withdraw(self) -> None:
         """Retract what backward rules with noValue concluded from matches that hold no more."""
