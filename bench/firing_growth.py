@@ -5,7 +5,9 @@ more per firing at 2,000 rules than at 200. For each size N this measures, on th
 CPU clock, with the collector as the reasoner agent runs it (start frozen):
 
 - the Python calls per firing (cProfile's count, one update): equal at every N means
-  no more rules woken per triple, no longer bucket or agenda walks;
+  no more rules woken per triple, no longer bucket or agenda walks; and the bytecodes
+  per firing (`sys.settrace`'s opcode events, one update): the interpreter's work,
+  which the machine's load does not move;
 - the garbage collector's share: the collections of each generation during the
   update and their CPU time (`gc.callbacks`), per firing;
 - with max(N) rules loaded, an update where only min(N) of them fire (the others'
@@ -31,7 +33,9 @@ import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
+from types import FrameType
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -82,6 +86,8 @@ def measure(rules: int, firing: int, runs: int) -> dict[str, float]:
     engine.apply(added=[BATTERY_LOW], removed=[BATTERY_NORMAL])
     profile.disable()
     calls = sum(row[1] for row in pstats.Stats(profile).stats.values())  # type: ignore[attr-defined]
+    engine.apply(added=ready[0], removed=ready[1])
+    opcodes = bytecodes(lambda: engine.apply(added=[BATTERY_LOW], removed=[BATTERY_NORMAL]))
     per = 1e6 / firing
     apart = [t - c for t, c in zip(totals, collected, strict=True)]
     return {
@@ -91,8 +97,27 @@ def measure(rules: int, firing: int, runs: int) -> dict[str, float]:
         "gc_us_per_firing": statistics.median(collected) * per,
         "no_gc_us_per_firing": statistics.median(apart) * per,
         "calls_per_firing": calls / firing,
+        "bytecodes_per_firing": opcodes / firing,
         **{f"gen{g}_per_update": c / runs for g, c in enumerate(collections)},
     }
+
+
+def bytecodes(action: Callable[[], object]) -> int:
+    """Return how many bytecodes the interpreter runs for `action` (Python code only)."""
+    count = [0]
+
+    def trace(frame: FrameType, event: str, arg: object) -> Callable:
+        frame.f_trace_opcodes = True
+        if event == "opcode":
+            count[0] += 1
+        return trace
+
+    sys.settrace(trace)
+    try:
+        action()
+    finally:
+        sys.settrace(None)
+    return count[0]
 
 
 def child(sizes: list[int], runs: int) -> None:
@@ -120,6 +145,7 @@ def main(options: argparse.Namespace) -> None:
                 row = json.loads(line)
                 found.setdefault((code, row["rules"], row["firing"]), []).append(row)
     keys = ["us_per_firing", "no_gc_us_per_firing", "gc_us_per_firing", "calls_per_firing"]
+    keys += ["bytecodes_per_firing"]
     keys += ["gen0_per_update", "gen1_per_update", "gen2_per_update"]
     print_table(
         "CPU us per firing (median of the rounds' medians); collections per update",
