@@ -67,6 +67,7 @@ class RuleIndex:
 
     def __init__(self) -> None:
         self.by_po: dict[tuple[int, int], list[Entry]] = {}
+        self._paired: set[int] = set()  # the predicates of `by_po`'s keys
         self.by_p: dict[int, list[Entry]] = {}
         self.anywhere: list[Entry] = []
         self._removal_by_p: dict[int, list[Entry]] = {}
@@ -84,16 +85,21 @@ class RuleIndex:
         """Return the joins a new triple with predicate `p` and object `o` starts, in order.
 
         Memoized per `(p, o)` pair a rule names, else per predicate: both are
-        bounded by the rules and the vocabulary, never by the values written.
+        bounded by the rules and the vocabulary, never by the values written. A
+        predicate no pair names is looked up first (a new setting's value: one lookup).
         Without the gated joins while their predicate has no triple: each of them
         would find nothing then, so the joins that run, and their order, are the same.
         """
         opened = self._gate in self._pos  # None (nothing gated) never is
+        by_p = self._starts_by_p[opened]
+        if p not in self._paired:  # no rule names an object with it: by predicate
+            found = by_p.get(p)
+            if found is not None:
+                return found
         memo = self._starts[opened]
         found = memo.get((p, o))
         if found is not None:
             return found
-        by_p = self._starts_by_p[opened]
         found = by_p.get(p)
         if found is None:
             anywhere = self.anywhere if opened else self._ungated
@@ -221,6 +227,7 @@ class RuleIndex:
         else:
             key = (terms.id(p), terms.id(o))  # type: ignore[arg-type]
             bucket = self.by_po.setdefault(key, [])
+            self._paired.add(key[0])
         bucket.append(entry)
         return bucket
 
