@@ -85,11 +85,17 @@ def serve_process(
             yield endpoint, proc.pid
         finally:
             proc.terminate()
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:  # still busy (an old store finishing a query)
-                proc.kill()
-                proc.wait()
+            reap([proc])  # one still busy (an old store finishing a query) is killed
+
+
+def reap(procs: Sequence[subprocess.Popen], timeout: float = 10.0) -> None:
+    """Wait for processes told to stop; kill those still running after `timeout` s each."""
+    for proc in procs:
+        try:
+            proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
 
 
 def cpu_seconds(pids: Sequence[int]) -> float:

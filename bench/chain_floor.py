@@ -40,7 +40,7 @@ from pathlib import Path
 
 import msgpack
 import zenoh
-from _harness import code_env, free_port, median, percentile, serve_process
+from _harness import code_env, free_port, median, percentile, reap, serve_process
 from _output import bench_parser, parse, print_table
 from rdflib import Literal, URIRef
 
@@ -124,12 +124,7 @@ def relays(
         for proc in procs:
             assert proc.stdin is not None
             proc.stdin.close()
-        for proc in procs:
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        reap(procs)
 
 
 def store_chain(runs: int, bystanders: int, code: Path | None = None) -> list[float]:

@@ -52,7 +52,7 @@ from pathlib import Path
 
 import msgpack
 import zenoh
-from _harness import code_env, cpu_seconds, median, percentile, serve_process
+from _harness import code_env, cpu_seconds, median, percentile, reap, serve_process
 from _output import bench_parser, parse, png, print_table
 from rdflib import Graph, Literal, Namespace, URIRef
 from rules_scaling import PAPER, paper_rules
@@ -136,12 +136,7 @@ def agents(
     finally:
         for proc in procs:
             proc.terminate()
-        for proc in procs:
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        reap(procs)
 
 
 def nt(term: object) -> str:
