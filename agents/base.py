@@ -30,6 +30,7 @@ from agents.vocabulary import local_name, robot_iri
 from agents.writes import Writes
 from space import (
     Change,
+    MirrorReads,
     SpaceError,
     SpaceTimeout,
     SpaceUnavailable,
@@ -38,7 +39,6 @@ from space import (
     declare_agent,
     identity_of,
 )
-from space.mirror import Reads
 
 Values = Mapping[tuple[Node, Node], Node | None]
 
@@ -108,7 +108,7 @@ class Agent:
         self._early: list[Callable[[], None]] = []
         self._leased: dict[tuple[Node, Node], Node] = {}  # values set, renewed while alive
         self._next_renewal = 0.0
-        self._reads: Reads | None = None  # what the last tick read (`ticks_on_reads`)
+        self._reads: MirrorReads | None = None  # what the last tick read (`ticks_on_reads`)
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
