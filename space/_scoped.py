@@ -70,6 +70,7 @@ class ScopedSubscription(Subscription):
         self.horizon = 0  # the highest seq the store itself said it reached
         self._last: dict[PartKey, int] = {}  # pair -> seq of the last part delivered on it
         self._patterns = [_patterns(s) for s in selectors]  # (subject, predicate) chunk matchers
+        self._exact = [_exact(s) for s in selectors]  # their chunks without wildcards, or None
         self._choice: dict[PartKey, bool] = {}  # pair -> selected (`_chosen`)
         self._prefix = keys.service_key(space, "changes") + "/"
         self._token = os.urandom(8)  # marks this subscription's own samples of ends
@@ -190,12 +191,13 @@ class ScopedSubscription(Subscription):
         selector that matches none of either received no part of it. Empty: no part was
         ours, nothing waits for this end.
         """
-        subjects, predicates = _named(end, "s"), _named(end, "p")
+        subjects, predicates = _Named.of(end, "s"), _Named.of(end, "p")
         return [
             through
-            for through, (ms, mp) in zip(self._through, self._patterns, strict=False)
-            if (subjects is None or any(map(ms, subjects)))
-            and (predicates is None or any(map(mp, predicates)))
+            for through, (ms, mp), (es, ep) in zip(
+                self._through, self._patterns, self._exact, strict=False
+            )
+            if subjects.hit(ms, es) and predicates.hit(mp, ep)
         ]
 
     def receive(self, item: object, fetch: Fetch) -> list[Received]:
@@ -338,12 +340,33 @@ _ENDS = 64  # changesets whose end is partly back, at most (more: the oldest wer
 _CHOICES = 100_000  # pairs whose selection is remembered, at most (then forgotten at once)
 
 
-def _named(end: dict, name: str) -> list[str] | None:
-    """Return the chunks an end names in `name`, None when it does not name them all."""
-    listed = end.get(name)
-    if isinstance(listed, list) and all(isinstance(x, str) for x in listed):
-        return listed
-    return None
+class _Named:
+    """The chunks an end names in one of its lists (None: it does not name them all)."""
+
+    def __init__(self, chunks: list[str] | None) -> None:
+        self.chunks = chunks
+        self._set: set[str] | None = None
+
+    @classmethod
+    def of(cls, end: dict, name: str) -> _Named:
+        listed = end.get(name)
+        if isinstance(listed, list) and all(isinstance(x, str) for x in listed):
+            return cls(listed)
+        return cls(None)
+
+    def hit(self, matcher: Matcher, exact: str | None) -> bool:
+        """Return whether a selector's chunk (its `matcher`, or `exact`) matches one named.
+
+        An exact chunk is looked up (a 200-predicate end against 4 shared predicates:
+        100 us of regular expressions per end, for every robot's agents, else).
+        """
+        if self.chunks is None:
+            return True
+        if exact is None:
+            return any(map(matcher, self.chunks))
+        if self._set is None:
+            self._set = set(self.chunks)
+        return exact in self._set
 
 
 def _prevs(prev: object, count: int, seq: int) -> list[int]:
@@ -370,6 +393,12 @@ Matcher = Callable[[str], object]  # truthy for a key chunk a selector's chunk m
 def _patterns(selector: str) -> tuple[Matcher, Matcher]:
     """Return matchers of the subject and predicate chunks a selector `<s>/<p>` selects."""
     return tuple(_matcher(chunk) for chunk in selector.split("/"))  # type: ignore[return-value]
+
+
+def _exact(selector: str) -> tuple[str | None, str | None]:
+    """Return a selector's subject and predicate chunks, None for one with a wildcard."""
+    s, p = selector.split("/")
+    return tuple(None if c == "*" or "$*" in c else c for c in (s, p))  # type: ignore[return-value]
 
 
 def _matcher(chunk: str) -> Matcher:
