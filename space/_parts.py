@@ -30,7 +30,9 @@ HEADER = ("v", "id", "agent", "ts", "cause", "seq", "lifespan")  # repeated in e
 # (`keys.end_key`): a scoped subscriber delivers its parts of it as one change when the end
 # comes, not part by part.
 BURST = 8
-NAMED = 64  # an end names its changeset's subjects and predicates, up to this many chunks
+# An end names its changeset's subjects, and its predicates, each up to this many chunks: a
+# scoped subscriber sends it back only through its subscribers that may select a part of it.
+NAMED = 256
 # Bytes of predicate chunks in one part's key, at most. Zenoh routes a key against each
 # subscriber's expression chunk by chunk (~3 us a chunk with 20 subscriptions, to declare a
 # publisher as to put undeclared), and past ~100 chunks worse than linearly (200: 1.7 ms):
@@ -118,16 +120,21 @@ def _merged(lists: list[dict[str, list]]) -> dict[str, list]:
 
 
 def end(seq: int, parts: Mapping[PartKey, object]) -> dict:
-    """Return the end of a changeset of `parts` (its pairs): its seq and, if few, their chunks.
+    """Return the end of a changeset of `parts` (its pairs): its seq and their chunks.
 
-    A subscriber with no selector that matches one of its subjects and one of its
-    predicates then knows at once that no part was for it (`space._scoped`).
+    Its subjects' chunks (`s`) and its predicates' (`p`), each list left out when
+    longer than `NAMED`. A subscriber then sends it back only through those of its
+    key expressions that match one of its subjects and one of its predicates
+    (`space._scoped`).
     """
+    out: dict = {"seq": seq}
     subjects = list(dict.fromkeys(s for s, _p in parts))
     predicates = list(dict.fromkeys(p for _s, p in parts))
-    if len(subjects) + len(predicates) > NAMED:
-        return {"seq": seq}
-    return {"seq": seq, "s": subjects, "p": predicates}
+    if len(subjects) <= NAMED:
+        out["s"] = subjects
+    if len(predicates) <= NAMED:
+        out["p"] = predicates
+    return out
 
 
 def joined(parts: list[Part]) -> Part:

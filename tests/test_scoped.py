@@ -264,7 +264,7 @@ def test_a_changeset_of_many_parts_is_delivered_in_few_changes(ts):
     assert len(seen) <= 15, f"3 changesets delivered in {len(seen)} changes"  # 55-91 without `n`
 
 
-@pytest.mark.parametrize("settings", [20, 200])  # the end names its 44 keys' chunks, or not
+@pytest.mark.parametrize("settings", [20, 300])  # the end names its predicates, or not
 def test_a_changeset_of_many_parts_is_delivered_at_its_end_not_after_a_hold(
     ts, monkeypatch, settings
 ):
@@ -290,6 +290,32 @@ def test_a_changeset_of_many_parts_is_delivered_at_its_end_not_after_a_hold(
     assert len(seen) == 1 and seen[0].seq == ack.seq
     assert set(seen[0].added) == {*robot1, hall}
     assert others == []
+
+
+def test_an_end_comes_back_only_through_the_subscribers_that_may_have_its_parts():
+    # An agent's scope is its robot, its robot's parts and a few shared predicates: an
+    # answer that sets its base's settings goes back through the base's subscriber only
+    # (each sample of it back costs a thread wake-up), one naming no predicate through
+    # those of the subjects that match, one naming nothing through all.
+    from space._scoped import ScopedSubscription, selectors
+    from space._subscription import Dispatcher
+    from space.prefixes import PrefixMap
+    from space.template import Template
+
+    scope = [(AC.robot1, None), ("ac:robot1_*", None), (None, AC.crowd_level)]
+    sub = ScopedSubscription(
+        Dispatcher(lambda first, last: ([], 0)),
+        Template.of(None),
+        lambda change: None,
+        space="s",
+        selectors=selectors(scope, PrefixMap({"ac": AC_NS})),
+    )
+    base, setting = term_chunk(AC.robot1_base), term_chunk(AC.setting_1)
+    through = [key for key, _n in sub._echoes({"seq": 9, "s": [base], "p": [setting]})]
+    assert through == [sub._through[1][0]]
+    assert len(sub._echoes({"seq": 9, "s": [base]})) == 2  # the predicate's may have it
+    assert sub._echoes({"seq": 9, "s": [term_chunk(AC.robot2_base)], "p": [setting]}) == []
+    assert len(sub._echoes({"seq": 9})) == 3
 
 
 @pytest.mark.parametrize("reconnected", [True, False])
