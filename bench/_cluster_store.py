@@ -27,7 +27,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import zenoh
-from _harness import code_env, cpu_seconds, free_port, percentile
+from _harness import code_env, cpu_seconds, free_port, percentile, reap
 from rdflib import Literal, URIRef
 from rdflib.namespace import OWL, RDF
 
@@ -68,12 +68,8 @@ def replicas(
     finally:
         for proc, _ in procs:
             proc.send_signal(signal.SIGTERM)
-        for proc, log in procs:
-            try:
-                proc.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        reap([proc for proc, _ in procs], timeout=15)
+        for _, log in procs:
             log.close()
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import msgpack
 import zenoh
+from _harness import reap
 from rdflib import Graph, Literal, Namespace, URIRef
 
 from agents.sim.fleet import fleet_description
@@ -172,11 +173,7 @@ def reasoner_argv(connect: str, space: str) -> list[str]:
 def stop_process(proc: subprocess.Popen) -> None:
     """Stop a child process (SIGTERM, then SIGKILL after 10 s) and reap it."""
     proc.terminate()
-    try:
-        proc.wait(timeout=10)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.wait()
+    reap([proc])
 
 
 def rss_mb(pid: int) -> float:

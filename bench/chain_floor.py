@@ -44,7 +44,7 @@ from _harness import code_env, free_port, median, percentile, reap, serve_proces
 from _output import bench_parser, parse, print_table
 from rdflib import Literal, URIRef
 
-from space import TripleSpace
+from space import TripleSpace, make_config
 from space.changeset import hlc_key
 from space.terms import to_nt
 
@@ -84,19 +84,15 @@ def relay(endpoint: str, role: str) -> None:
 
 def zenoh_relay(endpoint: str, role: str) -> None:
     """Run one plain-Zenoh relay: put `chain/<role>` from the callback of `chain/<role - 1>`."""
-    config = zenoh.Config()
-    config.insert_json5("mode", '"client"')
-    config.insert_json5("connect/endpoints", f'["{endpoint}"]')
-    session = zenoh.open(config)
-    publisher = session.declare_publisher(f"chain/{role}")
-    subscriber = session.declare_subscriber(
-        f"chain/{int(role) - 1}", lambda sample: publisher.put(sample.payload.to_bytes())
-    )
-    print("ready", flush=True)
-    sys.stdin.read()
-    subscriber.undeclare()
-    publisher.undeclare()
-    session.close()
+    with zenoh.open(make_config(connect=[endpoint])) as session:
+        publisher = session.declare_publisher(f"chain/{role}")
+        subscriber = session.declare_subscriber(
+            f"chain/{int(role) - 1}", lambda sample: publisher.put(sample.payload.to_bytes())
+        )
+        print("ready", flush=True)
+        sys.stdin.read()
+        subscriber.undeclare()
+        publisher.undeclare()
 
 
 @contextmanager
@@ -166,30 +162,25 @@ def store_chain(runs: int, bystanders: int, code: Path | None = None) -> list[fl
 def zenoh_chain(runs: int) -> list[float]:
     """Time `runs` chains of three plain Zenoh puts through a router (ms)."""
     endpoint = f"tcp/127.0.0.1:{free_port()}"
-    config = zenoh.Config()
-    config.insert_json5("mode", '"router"')
-    config.insert_json5("listen/endpoints", f'["{endpoint}"]')
-    config.insert_json5("scouting/multicast/enabled", "false")
     arrivals: queue.SimpleQueue[float] = queue.SimpleQueue()
-    with zenoh.open(config) as router, relays(endpoint, ["2", "3"], plain=True):
-        client_config = zenoh.Config()
-        client_config.insert_json5("mode", '"client"')
-        client_config.insert_json5("connect/endpoints", f'["{endpoint}"]')
-        with zenoh.open(client_config) as session:
-            sub = session.declare_subscriber("chain/3", lambda _sample: arrivals.put(time.time()))
-            publisher = session.declare_publisher("chain/1")
-            time.sleep(0.5)  # the relays' subscriptions have reached the router
-            results = []
-            for run in range(runs + 5):
-                start = time.time()
-                publisher.put(b"x" * 200)
-                arrival = arrivals.get(timeout=30)
-                if run >= 5:
-                    results.append((arrival - start) * 1e3)
-                time.sleep(0.02)
-            publisher.undeclare()
-            sub.undeclare()
-        del router
+    with (
+        zenoh.open(make_config(mode="router", listen=[endpoint])),
+        relays(endpoint, ["2", "3"], plain=True),
+        zenoh.open(make_config(connect=[endpoint])) as session,
+    ):
+        sub = session.declare_subscriber("chain/3", lambda _sample: arrivals.put(time.time()))
+        publisher = session.declare_publisher("chain/1")
+        time.sleep(0.5)  # the relays' subscriptions have reached the router
+        results = []
+        for run in range(runs + 5):
+            start = time.time()
+            publisher.put(b"x" * 200)
+            arrival = arrivals.get(timeout=30)
+            if run >= 5:
+                results.append((arrival - start) * 1e3)
+            time.sleep(0.02)
+        publisher.undeclare()
+        sub.undeclare()
     return results
 
 
@@ -212,7 +203,7 @@ def main() -> None:
     trees: list[tuple[str, Path | None]] = [("", None)]
     if args.old is not None:
         trees = [(" (old)", args.old.resolve()), (" (new)", None)]
-    for bystanders in (0, args.bystanders):
+    for bystanders in dict.fromkeys((0, args.bystanders)):
         for label, code in trees:  # in turn: a slow spell of a shared machine hits both
             name = "store, 3 hops" + (f" + {bystanders} bystanders" if bystanders else "")
             cases[name + label] = store_chain(args.runs, bystanders, code)

@@ -30,7 +30,6 @@ Run: python bench/floors.py [--runs 3] [--million]
 
 from __future__ import annotations
 
-import json
 import queue
 import subprocess
 import sys
@@ -41,8 +40,10 @@ from pathlib import Path
 
 import pyoxigraph as ox
 import zenoh
-from _harness import free_port, median, percentile
+from _harness import free_port, median, percentile, reap
 from _output import bench_parser, parse, png, print_table
+
+from space import make_config
 
 GRAPH = "urn:tspace:graph:floor:asserted"
 NQ = ox.RdfFormat.N_QUADS
@@ -169,19 +170,10 @@ def _doc(first: int, count: int, named: bool = True) -> str:
     )
 
 
-def _config(mode: str, endpoint: str) -> zenoh.Config:
-    conf = zenoh.Config()
-    conf.insert_json5("mode", json.dumps(mode))
-    key = "listen/endpoints" if mode == "router" else "connect/endpoints"
-    conf.insert_json5(key, json.dumps([endpoint]))
-    conf.insert_json5("scouting/multicast/enabled", "false")
-    return conf
-
-
 def serve(endpoint: str) -> None:
     """Child: a router whose queryable's thread replies and publishes what it got."""
     requests: queue.SimpleQueue[zenoh.Query] = queue.SimpleQueue()
-    with zenoh.open(_config("router", endpoint)) as session:
+    with zenoh.open(make_config(mode="router", listen=[endpoint])) as session:
         with session.declare_queryable("floor/write", requests.put):
             print("ready", flush=True)
             while True:
@@ -207,7 +199,7 @@ def listen(endpoint: str) -> None:
         else:
             delays.append(now - sent)
 
-    with zenoh.open(_config("client", endpoint)) as session:
+    with zenoh.open(make_config(connect=[endpoint])) as session:
         with session.declare_subscriber("floor/changes", on_sample):
             print("ready", flush=True)
             done.wait()
@@ -225,7 +217,7 @@ def zenoh_hop(count: int) -> tuple[float, float]:
             )
             children.append(child)
             assert child.stdout is not None and child.stdout.readline().strip() == "ready"
-        with zenoh.open(_config("client", endpoint)) as session:
+        with zenoh.open(make_config(connect=[endpoint])) as session:
             time.sleep(0.5)  # the subscriber's interest reaches the router
             for _ in range(count):
                 list(session.get("floor/write", payload=str(time.monotonic_ns()).encode()))
@@ -234,12 +226,7 @@ def zenoh_hop(count: int) -> tuple[float, float]:
         delays = [int(x) / 1e6 for x in out.split()]
         return percentile(delays, 50), percentile(delays, 99)
     finally:
-        for child in children:
-            try:
-                child.wait(timeout=10)
-            except subprocess.TimeoutExpired:  # a failed run: do not leave it behind
-                child.kill()
-                child.wait()
+        reap(children)  # a failed run: do not leave them behind
 
 
 def main() -> None:
