@@ -256,7 +256,6 @@ class Observer:
     """
 
     def __init__(self, session: zenoh.Session) -> None:
-        self.writers: set[str] = set()
         self.written: dict[str, int] = {}  # changesets published, by writer
         self.state: dict[tuple[str, str], set[str]] = {}  # (s, p) -> objects
         self.seq = 0
@@ -328,7 +327,6 @@ class Observer:
 
     def _apply(self, wire: dict) -> None:
         agent = wire.get("agent") or ""
-        self.writers.add(agent)
         self.written[agent] = self.written.get(agent, 0) + 1
         for s, p, o in wire.get("del") or ():
             self.state.get((s, p), set()).discard(o)
@@ -367,11 +365,11 @@ def measure(
     logs: Path,
     secure: Path | None = None,
     code: Path | None = None,
-) -> tuple[list[dict[str, float]], dict[str, float]]:
+) -> tuple[list[dict[str, float]], Load]:
     """Run the robot's processes and time `runs` very low batteries.
 
-    Returns their latencies, and the CPU milliseconds each process used per run (a
-    run being the very low battery and its undoing).
+    Returns their latencies, and the `Load` of a run (the very low battery and its
+    undoing).
 
     With `secure` (a `tspace certs` directory), every process speaks mTLS as itself
     and the bench as the operator. `code`: the source tree the store and the
@@ -392,7 +390,10 @@ def measure(
         observer.load(ts)
         with agents(agent_commands(endpoint, rules, secure), logs, code) as pids:
             observer.until(
-                lambda: {"reasoner", HW, NAV, BEHAVIOR} <= observer.writers and observer.at_rest(),
+                lambda: (
+                    {"reasoner", HW, NAV, BEHAVIOR} <= observer.written.keys()
+                    and observer.at_rest()
+                ),
                 "start of the agents",
             )
             observer.settle()
@@ -420,15 +421,26 @@ def measure(
                 )
                 observer.until(observer.at_rest, "robot back at rest")
                 observer.settle()  # what answers the reset (the reasoner's, the agents') is over
-            cpu = {
-                name: (cpu_seconds([pid]) - before[name]) * 1e3 / runs for name, pid in pids.items()
-            }
-            cpu["changesets"] = (sum(observer.written.values()) - published) / runs
+            load = Load(
+                {
+                    name: (cpu_seconds([pid]) - before[name]) * 1e3 / runs
+                    for name, pid in pids.items()
+                },
+                (sum(observer.written.values()) - published) / runs,
+            )
         observer.close()
-    return results, cpu
+    return results, load
 
 
 Results = dict[tuple[str, RuleSet], list[dict[str, float]]]  # (tree, rule set) -> runs
+
+
+@dataclass(frozen=True)
+class Load:
+    """What a run (a very low battery and its undoing) cost the processes measured."""
+
+    cpu: dict[str, float]  # CPU ms per run, by process (the store, then each agent)
+    changesets: float  # changesets the store published per run
 
 
 def case(tree: str, rule_set: RuleSet) -> str:
@@ -516,14 +528,14 @@ def main(
     if old is not None:
         trees.insert(0, ("old", old.resolve()))
     all_results: Results = {}
-    cpu_use: dict[tuple[str, RuleSet], dict[str, float]] = {}
+    loads: dict[tuple[str, RuleSet], Load] = {}
     with tempfile.TemporaryDirectory(prefix="tspace-e2e-") as tmp:
         for index, rule_set in enumerate(rule_sets):
             for tree, code in trees:  # in turn: a slow spell of a shared machine hits both
                 logs = Path(tmp) / f"{index}-{tree}"
                 logs.mkdir()
                 label = tree if old is not None else ""
-                all_results[(label, rule_set)], cpu_use[(label, rule_set)] = measure(
+                all_results[(label, rule_set)], loads[(label, rule_set)] = measure(
                     runs, rule_set, logs, code=code
                 )
     print_table(
@@ -547,7 +559,7 @@ def main(
         ],
         [summary(tree, rule_set, results) for (tree, rule_set), results in all_results.items()],
     )
-    processes = ["serve", *agent_commands("", [])]
+    processes = list(next(iter(loads.values())).cpu)
     print_table(
         "CPU per run, by process (ms; a run = the very low battery and its undoing; "
         "2 cores = 2 ms of CPU per ms)",
@@ -555,11 +567,11 @@ def main(
         [
             [
                 case(tree, rule_set),
-                *(cpu[name] for name in processes),
-                sum(cpu[name] for name in processes),
-                cpu["changesets"],
+                *(load.cpu[name] for name in processes),
+                sum(load.cpu.values()),
+                load.changesets,
             ]
-            for (tree, rule_set), cpu in cpu_use.items()
+            for (tree, rule_set), load in loads.items()
         ],
     )
     if as_lines:

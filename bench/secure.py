@@ -42,7 +42,7 @@ def main(rounds: int, runs: int) -> None:
             for mode in ("plain", "secure"):
                 logs = Path(tmp) / f"{mode}-{index}"
                 logs.mkdir()
-                results = measure(runs, RuleSet(), logs, certs if mode == "secure" else None)
+                results, _load = measure(runs, RuleSet(), logs, certs if mode == "secure" else None)
                 values = [r["last"] for r in results]
                 last[mode] += values
                 per_round[mode].append(median(values))
