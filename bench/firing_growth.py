@@ -30,7 +30,6 @@ import gc
 import json
 import pstats
 import statistics
-import subprocess
 import sys
 import time
 from collections.abc import Callable
@@ -41,7 +40,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _output import bench_parser, parse, print_table
 from rdflib import Literal
-from rules_scaling import AC, BATTERY_LOW, BATTERY_NORMAL, as_the_reasoner_runs, prepared_engine
+from rules_scaling import (
+    AC,
+    BATTERY_LOW,
+    BATTERY_NORMAL,
+    as_the_reasoner_runs,
+    prepared_engine,
+    run_child,
+)
 
 
 def settings(n: int, value: str) -> list:
@@ -135,14 +141,7 @@ def main(options: argparse.Namespace) -> None:
     found: dict[tuple, list[dict]] = {}
     for _ in range(options.rounds):
         for code, python in codes.items():
-            command = [str(python), __file__, "--child", "--runs", str(options.runs), "--sizes"]
-            done = subprocess.run(
-                command + [str(n) for n in options.sizes], capture_output=True, text=True
-            )
-            if done.returncode != 0:
-                raise SystemExit(f"{python} failed:\n{done.stderr[-3000:]}")
-            for line in done.stdout.splitlines():
-                row = json.loads(line)
+            for row in run_child(python, options.sizes, options.runs, False, __file__):
                 found.setdefault((code, row["rules"], row["firing"]), []).append(row)
     keys = ["us_per_firing", "no_gc_us_per_firing", "gc_us_per_firing", "calls_per_firing"]
     keys += ["bytecodes_per_firing"]

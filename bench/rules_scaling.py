@@ -204,9 +204,12 @@ def child(sizes: list[int], runs: int) -> None:
         print(json.dumps(line), flush=True)
 
 
-def run_child(python: Path, sizes: list[int], runs: int, cpu: bool) -> list[dict]:
-    """Run `child` under another interpreter (another checkout's venv, or this one)."""
-    command = [str(python), __file__, "--child", "--runs", str(runs), "--sizes", *map(str, sizes)]
+def run_child(
+    python: Path, sizes: list[int], runs: int, cpu: bool, script: str = __file__
+) -> list[dict]:
+    """Run `script`'s `child` (this one's, or another bench's) under another interpreter
+    (another checkout's venv, or this one); return its JSON lines."""
+    command = [str(python), script, "--child", "--runs", str(runs), "--sizes", *map(str, sizes)]
     done = subprocess.run(command + ["--cpu"] * cpu, capture_output=True, text=True)
     if done.returncode != 0:
         raise SystemExit(f"{python} failed:\n{done.stderr[-3000:]}")

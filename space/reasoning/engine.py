@@ -86,7 +86,8 @@ class RuleEngine(EngineReads, EngineFirings):
         with collector_paused():  # what it makes lives as long as the engine
             self._compiled = [index.add(self.terms, env, r, i) for i, r in enumerate(everything)]
             index.share(self._store.triples)
-            index.gate(self._store.pos, self.terms.id(OWL.sameAs))
+            self._same = self.terms.id(OWL.sameAs)
+            index.gate(self._store.pos, self._same)
         self._index = index
         # Backward rules with noValue: their conclusions go when no match holds (as Jena's).
         held = [c.order for c in self._compiled if c.rule.backward and withdrawable(c)]
@@ -104,7 +105,6 @@ class RuleEngine(EngineReads, EngineFirings):
         self._production = True
         self._loaded = False
         self._graph: Graph | None = None
-        self._same = self.terms.id(OWL.sameAs)
 
     @classmethod
     def from_files(
@@ -252,11 +252,8 @@ class RuleEngine(EngineReads, EngineFirings):
             if compiled.start is None:
                 continue
             compiled.start(0, 0, 0, out)
-            if compiled.production:
-                self._agenda.push(zip(repeat(compiled), out))
-            else:
-                self._derive(compiled, out, queue)
-            out.clear()
+            if out:
+                self._take(compiled, out, queue)
         if queue:
             self._propagate(queue)
 
