@@ -155,10 +155,20 @@ def published_seq(wire: object) -> int:
 
 
 def unpack(payload: bytes) -> object:
-    """Decode msgpack, turning every decoding failure into `MalformedPayload`."""
+    """Decode msgpack, turning every decoding failure into `MalformedPayload`.
+
+    A map keyed by a list or a map is valid msgpack Python cannot hold: msgpack
+    raises TypeError (unhashable), which would otherwise end a subscriber's
+    dispatcher thread on one forged message.
+    """
     try:
         return msgpack.unpackb(payload, raw=False, strict_map_key=False)
-    except (ValueError, msgpack.exceptions.ExtraData, msgpack.exceptions.UnpackException) as exc:
+    except (
+        ValueError,
+        TypeError,
+        msgpack.exceptions.ExtraData,
+        msgpack.exceptions.UnpackException,
+    ) as exc:
         raise MalformedPayload(f"not a msgpack payload: {exc}") from exc
 
 

@@ -17,6 +17,7 @@ AC = Namespace(AC_NS)
 GARBAGE = [
     b"",
     b"\xc1\xff not msgpack",
+    b"\x81\x90\x00",  # a map keyed by a list
     msgpack.packb([1, 2, 3]),
     msgpack.packb({"add": "not a list"}),
     msgpack.packb({"add": [["<a>", "<b>"]]}),
@@ -28,6 +29,7 @@ GARBAGE = [
 ]
 # Well-formed msgpack on the store's changes key, none of it published by a store.
 FORGED_CHANGES = [
+    b"\x81\x90\x00",  # a map keyed by a list: msgpack, but no Python dict (TypeError)
     msgpack.packb({"seq": 10**9}),  # no id
     msgpack.packb({"id": "forged", "v": 1}),  # no seq
     msgpack.packb({"id": "forged", "v": 1, "seq": "10"}),
@@ -107,7 +109,7 @@ def test_store_logs_one_line_per_malformed_message(ts, server):
     assert zenoh  # the session used above is a plain Zenoh session
 
 
-@pytest.mark.parametrize("payload", FORGED_CHANGES[:3])
+@pytest.mark.parametrize("payload", FORGED_CHANGES[:4])
 def test_a_published_changeset_needs_its_id_and_seq(payload):
     with pytest.raises(MalformedPayload):
         Changeset.decode(payload, published=True)

@@ -114,6 +114,7 @@ def test_a_forged_or_malformed_part_is_skipped_and_delivery_goes_on(server, ts, 
         with zenoh.open(make_config(mode="client", connect=[server.endpoint])) as plain:
             plain.put(key, pack(forged))
             plain.put(key, b"\xc1 not msgpack")
+            plain.put(key, b"\x81\x90\x00")  # a map keyed by a list: msgpack, no Python dict
         ts.write([level(1, "low")])
         wait_for(lambda: seen, what="the real part")
     assert [c.added for c in seen] == [[level(1, "low")]]
@@ -458,3 +459,40 @@ def test_a_part_whose_prev_does_not_fit_its_predicates_is_skipped(server, ts, ca
         wait_for(lambda: seen, what="the real part")
     assert [c.added for c in seen] == [[level(1, "low")]]
     assert "for each pair" in caplog.text
+
+
+def test_a_malformed_end_is_skipped_and_a_real_one_still_ends_the_wait(
+    server, ts, monkeypatch, caplog
+):
+    # Anyone can put on the ends' key: garbage there is logged and skipped, and the
+    # real end of a changeset of many parts still delivers them (the holds are far
+    # longer than the test's deadline: only the end can).
+    import space._subscription
+
+    monkeypatch.setattr(space._subscription, "IDLE", 60.0)
+    monkeypatch.setattr(space._subscription, "HOLD_MAX", 60.0)
+    seen: list = []
+    ts.subscribe(None, seen.append, scope=SCOPE)
+    forged = [
+        b"\xc1 not msgpack",
+        b"\x81\x90\x00",  # a map keyed by a list
+        pack([1, 2]),
+        pack({"s": []}),  # no seq
+        pack({"seq": "7"}),
+        pack({"seq": True}),
+        pack({"seq": 10**9, "s": [1, None], "p": "x"}),  # names nothing usable: heard by all
+    ]
+    with caplog.at_level(logging.WARNING, logger="tspace.subscription"):
+        with zenoh.open(make_config(mode="client", connect=[server.endpoint])) as plain:
+            for payload in forged:
+                plain.put(f"tspace/{ts.space}/@/changes/end", payload)
+        ack = ts.write(settings(1, "low", 20))
+        wait_for(lambda: sum(len(c.added) for c in seen) >= 20, what="the parts", timeout=10)
+        wait_for(
+            lambda: (
+                caplog.text.count("malformed end of changeset skipped") == 4
+                and caplog.text.count("not an integer skipped") == 2
+            ),
+            what="a line for each malformed end",
+        )
+    assert [c.seq for c in seen] == [ack.seq]
