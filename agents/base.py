@@ -184,7 +184,7 @@ class Agent:
         next_tick = time.monotonic()
         while not self._stop.is_set():
             while not self._inbox.empty():  # work handed over before the space was open
-                self.ts.post(self._inbox.get())
+                self.call_soon(self._inbox.get())
             self._changed = False
             if not self.ts.deliver(max(0.0, next_tick - time.monotonic())):
                 return  # closed

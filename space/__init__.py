@@ -29,7 +29,6 @@ _HOMES = {
         "ChangesetRejected",
         "InputError",
         "MalformedPayload",
-    "MirrorReads",
         "NoQuorum",
         "NoReasoner",
         "NotApplied",

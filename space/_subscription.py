@@ -286,9 +286,7 @@ class Dispatcher:
     def close(self) -> None:
         """Stop the thread after what is queued (`deliver` then returns False)."""
         self._queue.put(None)
-        with self._lock:
-            started = self._started
-        if started and self._thread.is_alive() and threading.current_thread() is not self._thread:
+        if self._thread.is_alive() and threading.current_thread() is not self._thread:
             self._thread.join(timeout=5)
 
     def _run(self) -> None:
