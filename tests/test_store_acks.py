@@ -89,3 +89,18 @@ def test_a_functional_value_read_again_after_each_way_it_can_change(ts):
     _functional(ts)
     ts.write([(AC.b9, AC.battery_level, Literal("last"))])
     assert set(ts.query((AC.b9, AC.battery_level, None)).objects()) == {Literal("last")}
+
+
+def test_a_triple_removed_after_each_way_it_can_come_back_is_removed(ts):
+    # The store remembers the triples its latest commits added or removed
+    # (space/store/values.py); each way a triple comes back must reach that memory,
+    # or removing it again would be taken for a no-op and the triple kept.
+    t = (AC.r7, AC.colour, Literal("red"))
+    ts.write([t])  # added as text (a plain write)
+    ts.remove([t])
+    ts.write([t])  # back as text again, after the store noted it absent
+    ts.remove([t])
+    assert not ts.query((AC.r7, AC.colour, None))
+    ts.apply([t], [(AC.r7, AC.colour, Literal("blue"))])  # back in a term-by-term changeset
+    ts.remove([t])
+    assert not ts.query((AC.r7, AC.colour, None))
