@@ -14,7 +14,8 @@ reasoner's answer replacing 200 settings, 400 lookups, ~12 % of the store
 thread's time. The triple it removes is mostly one a recent commit added, and the
 one it adds one a recent commit removed (a setting going back and forth), so each
 commit's triples are remembered as present or absent (`SETTLED` at most) and a
-lookup goes to the database only for the others. A bulk write's are not: they
+lookup goes to the database only for the others (or for a new value of a pair
+whose objects are remembered, a sensor's reading). A bulk write's are not: they
 would cost it ~10 % more CPU and are rarely written again soon.
 """
 
@@ -45,7 +46,13 @@ class Values:
     def held(self, space: str, which: str, t: Triple) -> bool | None:
         """Return whether graph `which` (`t`, `i`) holds `t` as a recent commit left it, or None."""
         settled = self._settled.get(space)
-        return None if settled is None else settled.get((which, t))
+        held = None if settled is None else settled.get((which, t))
+        if held is None and which == "t":
+            pairs = self._spaces.get(space)
+            objects = None if pairs is None else pairs.get((t[0], t[1]))
+            if objects is not None:  # every object of the pair is known: a sensor's new value
+                return t[2] in objects
+        return held
 
     def get(self, space: str, s: OxTerm, p: OxTerm) -> tuple[OxTerm, ...] | None:
         """Return the objects remembered for (s, p), or None if not remembered."""
