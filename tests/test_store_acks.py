@@ -1,7 +1,9 @@
 """An acknowledgement tells the truth: the triples the store did not apply, and why."""
 
+import uuid
 from pathlib import Path
 
+import msgpack
 import pytest
 from rdflib import Literal, Namespace
 from rdflib.namespace import OWL, RDF
@@ -104,3 +106,24 @@ def test_a_triple_removed_after_each_way_it_can_come_back_is_removed(ts):
     ts.apply([t], [(AC.r7, AC.colour, Literal("blue"))])  # back in a term-by-term changeset
     ts.remove([t])
     assert not ts.query((AC.r7, AC.colour, None))
+
+
+def test_a_request_sent_twice_in_a_burst_is_applied_once_and_acknowledged_alike(ts):
+    # The copies land in one batch of the store's (or the next): the second is answered
+    # with the first's outcome, marked `again`, and nothing is applied twice.
+    key = f"tspace/{ts.space}/@/write"
+    ident = uuid.uuid4().hex
+    twice = {"v": 1, "id": ident, "add": [[f"<{AC_NS}r8>", f"<{AC_NS}count>", '"1"']]}
+    others = [
+        {"v": 1, "id": uuid.uuid4().hex, "add": [[f"<{AC_NS}r8>", f"<{AC_NS}n>", f'"{i}"']]}
+        for i in range(20)
+    ]
+    burst = [*others[:10], twice, *others[10:], twice]
+    gets = [ts.session.get(key, payload=msgpack.packb(w), timeout=5) for w in burst]
+    acks = [msgpack.unpackb(next(iter(g)).ok.payload.to_bytes()) for g in gets]
+    first, second = acks[10], acks[-1]
+    assert first["id"] == second["id"] == ident and first["seq"] == second["seq"]
+    assert not first.get("again") and second.get("again")
+    assert len(ts.query((AC.r8, None, None))) == 21
+    seqs = [a["seq"] for a in acks[:10] + acks[11:-1]]
+    assert first["seq"] not in seqs and len(set(seqs)) == 20

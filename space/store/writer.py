@@ -89,6 +89,15 @@ class Writer:
         self._publisher = publisher
         self._next_probe = 0.0
         self._leases = leases
+        # The batch's decided changesets by (state, request id), until `commit`: a request sent
+        # twice in a batch is found at once (a scan of the batch cost 10 % at 2,000 writes/s).
+        self._batch: dict[tuple[int, str], Pending] = {}
+
+    def _pend(self, pending: list[Pending], p: Pending) -> None:
+        """Add a decided write, take or expiry to the batch (every batch ends in `commit`)."""
+        pending.append(p)
+        if p.net is not None:
+            self._batch.setdefault((id(p.state), p.net.entry.request), p)
 
     def _writable(self, name: str) -> SpaceState:
         """Return the state of a space about to be written, creating it within the limit."""
@@ -114,8 +123,9 @@ class Writer:
                 self.commit(pending)
                 pending.clear()
                 state = self._writable(req.space)
-        if any(p.state is state and p.net and p.net.entry.request == write.id for p in pending):
-            self._reply_later(req, state, pending, write.id)
+        first = self._batch.get((id(state), write.id))
+        if first is not None:
+            self._reply_later(req, state, pending, first)
             return
         done = self.db.outcome(state.name, write.id) if write.id else None
         if done is not None:
@@ -133,13 +143,12 @@ class Writer:
                 ack["dropped"] = dropped
             return ack
 
-        pending.append(Pending(req, state, net, reply))
+        self._pend(pending, Pending(req, state, net, reply))
 
     def _reply_later(
-        self, req: Request, state: SpaceState, pending: list[Pending], ident: str
+        self, req: Request, state: SpaceState, pending: list[Pending], first: Pending
     ) -> None:
         """Answer a request sent twice within one batch with the first one's outcome."""
-        first = next(p for p in pending if p.net and p.net.entry.request == ident)
         pending.append(
             Pending(req, state, None, lambda _n: {**first.reply(first.net), "again": True})
         )
@@ -168,7 +177,7 @@ class Writer:
                 return {"seq": state.seq, keys.ASSERTED: []}
             return {"seq": net.entry.seq, keys.ASSERTED: net.texts[1]}
 
-        pending.append(Pending(req, state, net, reply))
+        self._pend(pending, Pending(req, state, net, reply))
 
     def _check(self, req: Request, write: intake.WriteRequest, *, take: bool = False) -> None:
         """Refuse what the policy forbids its writer (no-op outside a secure space).
@@ -185,6 +194,7 @@ class Writer:
 
     def commit(self, pending: list[Pending]) -> None:
         """Commit a batch's changesets at once; then answer and publish, or fail every one."""
+        self._batch.clear()
         if not pending:
             return
         decided = [p for p in pending if p.net is not None]
@@ -229,7 +239,7 @@ class Writer:
             return
         stamp = lambda: str(self.session.new_timestamp())  # noqa: E731
         for state, net in retractions(self._leases, self._space, stamp, time.time(), budget):
-            pending.append(Pending(Request("expire", state.name, None), state, net, _no_reply))
+            self._pend(pending, Pending(Request("expire", state.name, None), state, net, _no_reply))
 
     def collect(self, count: int) -> None:
         """Delete up to `count` lease quads left by expiries, in a commit of their own."""
