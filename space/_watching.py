@@ -10,7 +10,8 @@ from zenoh import ext
 
 from space import keys
 from space._handle import Handle, TemplateLike, _triples
-from space._scoped import Scope, ScopedSubscription, selectors
+from space._scope import Scope, selectors
+from space._scoped import ScopedSubscription
 from space._subscription import Callback, Change, Subscription
 from space.changeset import unpack
 from space.errors import InputError, MalformedPayload

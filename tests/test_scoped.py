@@ -299,7 +299,8 @@ def test_an_end_comes_back_only_through_the_subscribers_that_may_have_its_parts(
     # answer that sets its base's settings goes back through the base's subscriber only
     # (each sample of it back costs a thread wake-up), one naming no predicate through
     # those of the subjects that match, one naming nothing through all.
-    from space._scoped import ScopedSubscription, selectors
+    from space._scope import selectors
+    from space._scoped import ScopedSubscription
     from space._subscription import Dispatcher
     from space.prefixes import PrefixMap
     from space.template import Template
