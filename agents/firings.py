@@ -33,6 +33,7 @@ def rule_names(triples: Iterable[Triple]) -> list[str]:
 
 
 RECORD_TYPES = frozenset({AC.RuleFiring, AC.RuleLoop})
+_TYPE = RDF.type  # looked up once: an rdflib namespace's attribute costs ~1 us a triple
 
 
 def record_subjects(triples: Iterable[Triple]) -> set[Node]:
@@ -41,7 +42,7 @@ def record_subjects(triples: Iterable[Triple]) -> set[Node]:
     A record is written and dropped whole, its type with it, so the triples of one
     changeset (or a whole state) name their records themselves.
     """
-    return {s for s, p, o in triples if p == RDF.type and o in RECORD_TYPES}
+    return {s for s, p, o in triples if o in RECORD_TYPES and p == _TYPE}  # the set first: fast
 
 
 def without_records(triples: Iterable[Triple]) -> list[Triple]:
