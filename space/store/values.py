@@ -1,5 +1,4 @@
-"""What the database holds, remembered between decisions: the objects of (subject,
-functional property) pairs, and the triples the latest commits added or removed.
+"""The objects of (subject, functional property) pairs, remembered between decisions.
 
 Deciding a functional write reads the value it replaces (`StoreDB.objects`).
 A value rewritten at every reading leaves RocksDB a tombstone for each old
@@ -8,15 +7,6 @@ steps over all of them: 9 us for a fresh pair, 30-1,250 us (often ~250) once
 64 robots had rewritten theirs a few thousand times, with the store's flushes
 running. So the pairs read are kept here, and each commit updates the ones it
 changes: a decision reads the database once per pair, not once per reading.
-
-A decision also looks up each triple it removes or adds (`StoreDB.has`): a
-reasoner's answer replacing 200 settings, 400 lookups, ~12 % of the store
-thread's time. The triple it removes is mostly one a recent commit added, and the
-one it adds one a recent commit removed (a setting going back and forth), so each
-commit's triples are remembered as present or absent (`SETTLED` at most) and a
-lookup goes to the database only for the others (or for a new value of a pair
-whose objects are remembered, a sensor's reading). A bulk write's are not: they
-would cost it ~10 % more CPU and are rarely written again soon.
 """
 
 from __future__ import annotations
@@ -26,11 +16,8 @@ from space.store.db_layout import Entry
 from space.store.oxterms import OxTerm
 
 LIMIT = 100_000  # pairs remembered at most (then forgotten all at once, and read again)
-SETTLED = 50_000  # triples remembered as present or absent at most (then forgotten at once)
-BULK = 2_000  # a changeset of more triples is not remembered (its space's are forgotten)
 
 Pair = tuple[OxTerm, OxTerm]
-Triple = tuple[OxTerm, OxTerm, OxTerm]
 
 
 class Values:
@@ -40,19 +27,6 @@ class Values:
         self._spaces: dict[str, dict[Pair, tuple[OxTerm, ...]]] = {}
         self._predicates: dict[str, set[str]] = {}  # N-Triples of the predicates remembered
         self._size = 0
-        self._settled: dict[str, dict[tuple[str, Triple], bool]] = {}  # space -> (graph, t) -> held
-        self._settled_size = 0
-
-    def held(self, space: str, which: str, t: Triple) -> bool | None:
-        """Return whether graph `which` (`t`, `i`) holds `t` as a recent commit left it, or None."""
-        settled = self._settled.get(space)
-        held = None if settled is None else settled.get((which, t))
-        if held is None and which == "t":
-            pairs = self._spaces.get(space)
-            objects = None if pairs is None else pairs.get((t[0], t[1]))
-            if objects is not None:  # every object of the pair is known: a sensor's new value
-                return t[2] in objects
-        return held
 
     def get(self, space: str, s: OxTerm, p: OxTerm) -> tuple[OxTerm, ...] | None:
         """Return the objects remembered for (s, p), or None if not remembered."""
@@ -68,8 +42,7 @@ class Values:
         self._size += 1
 
     def committed(self, entries: list[Entry]) -> None:
-        """Apply what a successful commit changed to the pairs and triples remembered."""
-        self._settle(entries)
+        """Apply what a successful commit changed to the pairs remembered."""
         for e in entries:
             pairs = self._spaces.get(e.space)
             if not pairs:
@@ -88,38 +61,12 @@ class Values:
                 if held is not None and o not in held:
                     pairs[(s, p)] = (*held, o)
 
-    def _settle(self, entries: list[Entry]) -> None:
-        if self._settled_size >= SETTLED:
-            self._settled.clear()
-            self._settled_size = 0
-        for e in entries:
-            if e.plain or _size(e) > BULK:  # texts, or a bulk write: forget the space's
-                self._settled_size -= len(self._settled.pop(e.space, {}))
-                continue
-            settled = self._settled.setdefault(e.space, {})
-            before = len(settled)
-            for which, gone, new in (
-                ("t", e.removed, e.added),
-                ("i", e.inferred_removed, e.inferred_added),
-            ):
-                for t in gone:
-                    settled[(which, t)] = False
-                for t in new:
-                    settled[(which, t)] = True
-            self._settled_size += len(settled) - before
-
     def clear(self) -> None:
-        """Forget everything (the database was changed otherwise than by `committed`)."""
+        """Forget every pair (the database was changed otherwise than by `committed`)."""
         self._spaces.clear()
         self._predicates.clear()
         self._size = 0
-        self._settled.clear()
-        self._settled_size = 0
 
     def _forget(self, space: str) -> None:
         self._size -= len(self._spaces.pop(space, {}))
         self._predicates.pop(space, None)
-
-
-def _size(e: Entry) -> int:
-    return len(e.removed) + len(e.added) + len(e.inferred_removed) + len(e.inferred_added)
