@@ -108,7 +108,7 @@ class StoreDB:
         self._cut: dict[str, int] = {}  # per space, the log's last cut (entries <= it are gone)
         # A cluster replica's revision quad(s) as its last commit left them (None: not read).
         self.revision_objects: list[str] | None = None
-        self.values = Values()  # functional pairs' objects, as `objects` read them
+        self.values = Values()  # functional pairs' objects, triples of the latest commits
         self._flusher = Flusher(lambda: self.store if hasattr(self, "store") else None)
 
     def close(self) -> None:
@@ -154,6 +154,11 @@ class StoreDB:
 
     def has(self, space: str, which: str, t: OxTriple) -> bool:
         """Return whether a graph (`t` or `i`) of a space holds a triple."""
+        settled = self.values.settled.get(space)
+        if settled is not None:
+            held = settled.get((which, t))
+            if held is not None:
+                return held
         return ox.Quad(t[0], t[1], t[2], graph(space, which)) in self.store
 
     def has_subject(self, space: str, s: OxTerm) -> bool:
