@@ -9,6 +9,9 @@ Two cases, into a space already holding 100,000 inferred triples:
   write), as the store sees it: the store's share of write -> notification;
 - `200 replaced`: the reasoner's answer when 200 rules fire, 200 inferred values removed and
   200 added (issue 13's "+200 rules all firing"), whole path and `StoreDB.commit` alone;
+- `200 settings flipped`: end_to_end's "+200 firing" answer as the store sees it, 200
+  asserted settings of one subject going from "normal" to "low" and back at each write (the
+  values a reasoner's rules set come and go): the writer thread's CPU, whole write;
 - `200 replaced, parts`: the same answer again, 100 times, with a subscriber to its parts
   in another session (the store then cuts it by subject, 200 pairs of one subject in a few
   parts of at most 4 KB of predicates in their keys, and puts each):
@@ -106,14 +109,14 @@ def main(rounds: int) -> None:
         db.store.optimize()  # the load's compactions done before the clock runs
         subscriber = session.declare_subscriber("tspace/w/@/changes", lambda _s: None)
 
-        def write(wire: dict) -> float:
+        def write(wire: dict, clock: Callable[[], float] = time.perf_counter) -> float:
             wire.update(v=WIRE_VERSION, id=uuid.uuid4().hex, agent="bench")
             wire["ts"] = str(session.new_timestamp())
-            start = time.perf_counter()
+            start = clock()
             pending: list = []
             writer.write(Request("write", "w", pack(wire), None, "tspace/w/@/write"), pending)
             writer.commit(pending)
-            return time.perf_counter() - start
+            return clock() - start
 
         def value(i: int) -> str:
             return f'"{time.monotonic_ns() + i}"^^<{INT}>'
@@ -129,8 +132,13 @@ def main(rounds: int) -> None:
             new = [["<urn:b:base>", f"<urn:b:setting_{k}>", value(k)] for k in range(200)]
             whole.append(write({"iadd": new, "idel": old}))
             old = new
+        flips = [
+            write(_flipped(k % 2 == 1, first=k == 0), clock=time.thread_time)
+            for k in range(rounds + 1)
+        ]
         figures = {
             "one triple, whole write (us)": _median_us(one[rounds:]),
+            "200 settings flipped, whole write (us CPU)": _median_us(flips[1:]),
             "200 replaced, whole write (us)": _median_us(whole[1:]),
             "200 replaced, StoreDB.commit (us)": _median_us(commits[1:]),
             "200 replaced, parts: PartPublisher.publish (us CPU)": _parts(session, write, endpoint),
@@ -242,6 +250,17 @@ class _TimedPut:
         start = time.perf_counter()
         self._publisher.put(payload)
         self._calls.append(time.perf_counter() - start)
+
+
+def _flipped(low: bool, *, first: bool = False) -> dict:
+    """Return end_to_end's "+200 firing" answer: 200 asserted settings of a base to "low"
+    (`low`) or back to "normal", each replacing the other (`first`: only add them)."""
+    base, values = "<urn:b:robot1_base>", ('"normal"', '"low"')
+    new, old = (values[1], values[0]) if low else values
+    rows = [[base, f"<urn:b:setting_{k}>", new] for k in range(200)]
+    if first:
+        return {"add": rows}
+    return {"add": rows, "del": [[base, f"<urn:b:setting_{k}>", old] for k in range(200)]}
 
 
 def _bulk_rows(i: int) -> list[list[str]]:

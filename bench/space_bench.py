@@ -7,7 +7,8 @@ subscriber run from the same tree as the server (the client's path is part of th
 the other clients are this tree's (the wire format is compatible both ways), so the rest of
 the difference is the store's. `--latency-only`: only the write -> notification latency.
 `--write-path`: only the store's own time for a write, in-process, in each tree
-(`_write_path.py`: a one-triple write; 200 inferred values replaced, and its commit alone).
+(`_write_path.py`: a one-triple write; 200 inferred values replaced, and its commit alone; 200
+asserted settings flipped, a reasoner's answer).
 Every figure is a median over runs; the store, the subscriber and the writer
 are separate processes talking through the router on loopback.
 """
