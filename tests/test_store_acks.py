@@ -127,3 +127,14 @@ def test_a_request_sent_twice_in_a_burst_is_applied_once_and_acknowledged_alike(
     assert len(ts.query((AC.r8, None, None))) == 21
     seqs = [a["seq"] for a in acks[:10] + acks[11:-1]]
     assert first["seq"] not in seqs and len(set(seqs)) == 20
+
+
+def test_a_triple_a_bulk_changeset_removed_is_written_again(ts):
+    # A changeset of more than `values.BULK` triples is not remembered triple by triple:
+    # its space's memory is forgotten instead, or a triple it removed would still be
+    # taken as held, and writing it again dropped as a no-op.
+    t = (AC.r10, AC.colour, Literal("red"))
+    ts.apply([t], [(AC.r10, AC.colour, Literal("blue"))])  # term by term: remembered held
+    ts.apply([(AC.r10, AC.n, Literal(i)) for i in range(2_001)], [t])  # removed in bulk
+    ts.write([t])
+    assert ts.query(t)

@@ -111,3 +111,27 @@ def test_a_read_only_directory_of_a_newer_format_is_refused_too(disk: Path):
     newer_format_dir(data)
     subprocess.run(["mount", "-o", "remount,ro", str(disk)], check=True)
     assert "format 99" in serve_refusal(data)
+
+
+def test_a_triple_a_failed_fsync_left_on_disk_still_ends_with_its_lifespan(disk: Path):
+    # With --fsync a commit can reach the database and fail only at its flush (a full
+    # disk): the store must not trust what it remembers of its latest commits then
+    # (space/store/values.py), or the leases it reads back take the triple for absent
+    # and it never expires.
+    srv = Server(disk / "data", "--fsync")
+    srv.log = disk.parent / "serve.log"
+    srv.start()
+    t = (AC.lamp, AC.state, AC.on)
+    try:
+        with TripleSpace.open(srv.endpoint, space="fsync") as ts:
+            ts.write([t], lifespan=60)
+            ts.remove([t])  # remembered as absent
+            _fill(disk / "filler")
+            with pytest.raises(ChangesetRejected, match="not applied"):
+                ts.write([t], lifespan=2)
+            (disk / "filler").unlink()
+            wait_for(lambda: _writes(ts, 1), 20, "writes to be accepted again")
+            # whether or not the failed commit's update reached the database
+            wait_for(lambda: not ts.query(t), 20, "the triple to end with its lifespan")
+    finally:
+        srv.stop()

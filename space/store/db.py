@@ -216,6 +216,9 @@ class StoreDB:
             if self.durable:
                 self.store.flush()
         except (OSError, RuntimeError) as exc:
+            # The update may be in the database all the same (a flush failing after it,
+            # `durable`): what is remembered of it is not to be trusted any more.
+            self.values.clear()
             raise CommitFailed(f"the database could not commit: {exc}") from exc
         self.values.committed(entries)
         if revision is not None:
