@@ -17,14 +17,13 @@ import base64
 import gc
 import logging
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import pyoxigraph as ox
 
 from space.errors import SpaceError
-from space.store import oxterms
 from space.store.db_layout import (
     DROPPED,
     FUNCTIONAL,
@@ -73,7 +72,7 @@ class Loaded:
 class StoreDB:
     """Open (creating if needed) the Oxigraph database under `data_dir`.
 
-    Writes (`commit`, `replace`) come from one thread; reads may come from any
+    Writes (`commit`) come from one thread; reads may come from any
     thread, each call reading one consistent snapshot.
 
     A database that cannot be opened for writing (a read-only directory) is
@@ -328,56 +327,9 @@ class StoreDB:
             return seq, base64.b64decode(q.object.value), dropped
         return None
 
-    def triples(self, space: str) -> Iterator[tuple[str, str, str, str, str]]:
-        """Yield `(g, s, p, o, ts)` of every triple of a space, N-Triples texts."""
-        stamps = {
-            (q.subject, q.predicate): q.object.value
-            for q in self.store.quads_for_pattern(None, None, None, graph(space, "stamps"))
-        }
-        for which in ("t", "i"):
-            for s, p, o in self.match(space, which, (None, None, None)):
-                ts = stamps.get((s, p), "") if which == "t" else ""
-                yield which, oxterms.text(s), oxterms.text(p), oxterms.text(o), ts
-
     def prefixes(self, space: str) -> dict[str, str]:
         """Return the prefix bindings registered in a space."""
         return self.load(space).prefixes
-
-    def replace(
-        self,
-        space: str,
-        rows: Iterable[tuple[str, str, str, str, str]],
-        prefixes: dict[str, str],
-        last: tuple[int, bytes],
-    ) -> None:
-        """Make a space a copy of another store's, in one update.
-
-        `rows` are `(g, s, p, o, ts)` as `triples()` gives them; `last` is the
-        `(seq, payload)` of the copy's last changeset, kept as its only log entry.
-
-        Raises:
-            CommitFailed: nothing was written.
-        """
-        from space.store import render
-
-        entry = Entry(space=space, seq=last[0], request="", payload=last[1], prefixes=prefixes)
-        for g, s, p, o, ts in rows:
-            t = (oxterms.term(s), oxterms.term(p), oxterms.term(o))
-            (entry.added if g == "t" else entry.inferred_added).append(t)
-            if ts:
-                entry.stamps_added.append((t[0], t[1], ox.Literal(ts)))
-        clear = [
-            f"DROP SILENT GRAPH <{g.value}>"
-            for g in (*(graph(space, w) for w in ("t", "i", "stamps")), log_graph(space))
-        ]
-        node = space_node(space).value
-        clear.append(f"DELETE WHERE {{ GRAPH <{META.value}> {{ <{node}> ?p ?o }} }}")
-        self.values.clear()
-        try:
-            self.store.update(" ;\n".join([*clear, render.update([entry], fresh=True)]))
-            self.store.flush()
-        except (OSError, RuntimeError) as exc:
-            raise CommitFailed(f"the database could not commit: {exc}") from exc
 
 
 def _size(e: Entry) -> int:
