@@ -55,6 +55,10 @@ class CommitFailed(SpaceError):
     """The database could not commit (disk full, read-only directory, I/O error)."""
 
 
+class NotFlushed(CommitFailed):
+    """With `durable` (`--fsync`): the batch is in the database, but its flush to disk failed."""
+
+
 class DataDirInUse(SpaceError):
     """Another store process has the data directory open."""
 
@@ -196,6 +200,8 @@ class StoreDB:
         same update (`space.store.cluster_db`), so a restart resumes there.
 
         Raises:
+            NotFlushed: the batch is in the database (and remembered so), only its flush
+                to disk failed (`durable`).
             CommitFailed: nothing of the batch was written.
         """
         from space.store import render
@@ -212,18 +218,18 @@ class StoreDB:
 
                     ops += revision_ops(self, revision)
                 self.store.update(" ;\n".join(ops))
-            if self.durable:
-                self.store.flush()
         except (OSError, RuntimeError) as exc:
-            # The update may be in the database all the same (a flush failing after it,
-            # `durable`): what is remembered of it is not to be trusted any more.
-            self.values.clear()
             raise CommitFailed(f"the database could not commit: {exc}") from exc
         self.values.committed(entries)
         if revision is not None:
             from space.store.cluster_db import revision_written
 
             revision_written(self, revision)
+        if self.durable:
+            try:
+                self.store.flush()
+            except (OSError, RuntimeError) as exc:
+                raise NotFlushed(f"applied, but not flushed to disk: {exc}") from exc
         if not self.durable:
             self._flusher.wrote(sum(map(_size, entries)) + len(extra[1]))
         for e in entries:

@@ -21,7 +21,7 @@ from space import keys
 from space.changeset import pack, unpack
 from space.errors import QueryError, SpaceError
 from space.store import intake
-from space.store.db import CommitFailed, StoreDB
+from space.store.db import CommitFailed, NotFlushed, StoreDB
 from space.store.guard import Refused, WriteGuard
 from space.store.lifespans import Leases, retractions
 from space.store.publish import Publisher
@@ -116,6 +116,12 @@ class Writer:
 
     def write(self, req: Request, pending: list[Pending]) -> None:
         write = intake.write_request(req.payload or b"")
+        if self.failed and write.id:  # a retry is told its outcome even while writes are refused
+            keys.check_space(req.space)
+            done = self.db.outcome(req.space, write.id)
+            if done is not None:
+                _again(req, write.id, done)
+                return
         state = self._writable(req.space)
         if self.guard is not None or not state.takes_plain(write):
             write.parse_plain()
@@ -129,10 +135,7 @@ class Writer:
             return
         done = self.db.outcome(state.name, write.id) if write.id else None
         if done is not None:
-            again: dict = {"id": write.id, "seq": done[0], "again": True}
-            if done[2]:
-                again["dropped"] = unpack(done[2])
-            answer(req, again)
+            _again(req, write.id, done)
             return
         self._check(req, write)
         net, dropped = decide(state, write, write.ts or str(self.session.new_timestamp()))
@@ -203,6 +206,9 @@ class Writer:
             self.db.commit(
                 entries, self._leases.take_changes() if self._leases is not None else ([], [])
             )
+        except NotFlushed as exc:
+            self._unflushed(exc, pending, decided)
+            return
         except CommitFailed as exc:
             self._fail(exc, pending)
             return
@@ -216,11 +222,24 @@ class Writer:
             p.req.query.reply(p.req.key, pack(p.reply(p.net)))
             p.req.query.drop()
 
-    def _fail(self, exc: CommitFailed, pending: list[Pending]) -> None:
-        """Refuse writes from now on; forget what the batch decided; tell every writer."""
+    def _unflushed(self, exc: NotFlushed, pending: list[Pending], decided: list[Pending]) -> None:
+        """The batch is in the database, its flush failed (`--fsync`): it is published, its
+        writers are told just that, and writes are refused until a commit works again."""
+        for p in pending:
+            p.state.settle()
+        self._publisher.publish([(p.state, p.net) for p in decided])  # type: ignore[misc]
+        self._refuse(exc)
+        for p in pending:
+            reject(p.req, NotFlushed(f"{exc}; a retry of this request is answered as applied"))
+
+    def _refuse(self, exc: CommitFailed) -> None:
         self.failed = str(exc)
         self._next_probe = time.monotonic() + PROBE
         log.error("%s: refusing writes until a commit works again", exc)
+
+    def _fail(self, exc: CommitFailed, pending: list[Pending]) -> None:
+        """Refuse writes from now on; forget what the batch decided; tell every writer."""
+        self._refuse(exc)
         for name in {p.state.name for p in pending}:
             self._spaces.pop(name, None)
         for name in {p.state.name for p in pending}:
@@ -284,6 +303,14 @@ def decide(state: SpaceState, write: intake.WriteRequest, stamp: str) -> tuple[N
 
 def _no_reply(_net: Net | None) -> dict:
     return {}
+
+
+def _again(req: Request, ident: str, done: tuple[int, bytes, bytes]) -> None:
+    """Answer a write already applied with its first outcome (`StoreDB.outcome`)."""
+    again: dict = {"id": ident, "seq": done[0], "again": True}
+    if done[2]:
+        again["dropped"] = unpack(done[2])
+    answer(req, again)
 
 
 def answer(req: Request, reply: dict) -> None:
