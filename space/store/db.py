@@ -230,8 +230,8 @@ class StoreDB:
                 self.store.flush()
             except (OSError, RuntimeError) as exc:
                 raise NotFlushed(f"applied, but not flushed to disk: {exc}") from exc
-        if not self.durable:
-            self._flusher.wrote(sum(map(_size, entries)) + len(extra[1]))
+        else:
+            self._flusher.wrote(sum(e.size() for e in entries) + len(extra[1]))
         for e in entries:
             self._commits[e.space] = self._commits.get(e.space, 0) + 1
         for space, seq in {e.space: e.seq for e in entries}.items():
@@ -336,14 +336,3 @@ class StoreDB:
     def prefixes(self, space: str) -> dict[str, str]:
         """Return the prefix bindings registered in a space."""
         return self.load(space).prefixes
-
-
-def _size(e: Entry) -> int:
-    """Return the number of quads an entry writes, roughly (its triples)."""
-    return (
-        len(e.plain)
-        + len(e.added)
-        + len(e.removed)
-        + len(e.inferred_added)
-        + len(e.inferred_removed)
-    )

@@ -103,6 +103,16 @@ class Entry:
     stamps_removed: list[OxTriple] = field(default_factory=list)
     stamps_added: list[OxTriple] = field(default_factory=list)
 
+    def size(self) -> int:
+        """Return the triples it adds or removes (plain ones included)."""
+        return (
+            len(self.plain)
+            + len(self.added)
+            + len(self.removed)
+            + len(self.inferred_added)
+            + len(self.inferred_removed)
+        )
+
 
 def log_rows(
     space: str, seq: int, request: str, payload: bytes, dropped: bytes = b""

@@ -84,7 +84,7 @@ class Values:
             self.settled.clear()
             self._settled_size = 0
         for e in entries:
-            if e.plain or _size(e) > BULK:  # texts, or a bulk write: forget the space's
+            if e.plain or e.size() > BULK:  # texts, or a bulk write: forget the space's
                 self._settled_size -= len(self.settled.pop(e.space, {}))
                 continue
             settled = self.settled.setdefault(e.space, {})
@@ -110,7 +110,3 @@ class Values:
     def _forget(self, space: str) -> None:
         self._size -= len(self._spaces.pop(space, {}))
         self._predicates.pop(space, None)
-
-
-def _size(e: Entry) -> int:
-    return len(e.removed) + len(e.added) + len(e.inferred_removed) + len(e.inferred_added)

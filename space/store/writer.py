@@ -201,14 +201,14 @@ class Writer:
         if not pending:
             return
         decided = [p for p in pending if p.net is not None]
+        unflushed: NotFlushed | None = None
         try:
             entries = [p.net.entry for p in decided]  # type: ignore[union-attr]
             self.db.commit(
                 entries, self._leases.take_changes() if self._leases is not None else ([], [])
             )
-        except NotFlushed as exc:
-            self._unflushed(exc, pending, decided)
-            return
+        except NotFlushed as exc:  # `--fsync`: in the database and served, not flushed
+            unflushed = exc
         except CommitFailed as exc:
             self._fail(exc, pending)
             return
@@ -216,21 +216,19 @@ class Writer:
             p.state.settle()
         # Published before answered: watchers hear of a change as soon as it is durable.
         self._publisher.publish([(p.state, p.net) for p in decided])  # type: ignore[misc]
+        if unflushed is not None:  # its writers are told just that; writes are refused
+            self._refuse(unflushed)
+            for p in pending:
+                reject(
+                    p.req,
+                    NotFlushed(f"{unflushed}; a retry of this request is answered as applied"),
+                )
+            return
         for p in pending:
             if p.req.query is None:
                 continue
             p.req.query.reply(p.req.key, pack(p.reply(p.net)))
             p.req.query.drop()
-
-    def _unflushed(self, exc: NotFlushed, pending: list[Pending], decided: list[Pending]) -> None:
-        """The batch is in the database, its flush failed (`--fsync`): it is published, its
-        writers are told just that, and writes are refused until a commit works again."""
-        for p in pending:
-            p.state.settle()
-        self._publisher.publish([(p.state, p.net) for p in decided])  # type: ignore[misc]
-        self._refuse(exc)
-        for p in pending:
-            reject(p.req, NotFlushed(f"{exc}; a retry of this request is answered as applied"))
 
     def _refuse(self, exc: CommitFailed) -> None:
         self.failed = str(exc)
