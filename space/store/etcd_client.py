@@ -30,7 +30,8 @@ log = logging.getLogger("tspace.etcd")
 
 CALL_TIMEOUT = 0.5  # one attempt on one member
 DEADLINE = 3.0  # every attempt of one call together
-PROBE_TIMEOUT = 0.3
+PROBE_TIMEOUT = 0.3  # one status request
+PROBE_WINDOW = 1.0  # every status request to one member in one probe
 # etcd answers a proposal it cannot make now (no leader, leader changed, overloaded,
 # stopping) with these; the next member or the next attempt may succeed.
 _RETRY = {
@@ -132,24 +133,47 @@ class EtcdClient:
         reply = await self._retrying(lambda i, t: self._lease[i].LeaseGrant(request, timeout=t))
         return reply.ID
 
-    async def reachable(self) -> int:
-        """Return how many members answer a status request within PROBE_TIMEOUT.
+    async def reachable(self, enough: int | None = None) -> int:
+        """Return how many members answer a status request, probing for up to PROBE_WINDOW.
 
-        A member that misses the first probe gets a second one: the first call
-        on an idle channel also connects it, which a loaded host can make take
-        longer than the probe, and a live member must not be counted as gone.
+        A member that refuses (nothing listens, or its channel is failing) is
+        asked once more after a pause and then counted gone; one that is only
+        slow is asked again until the window closes: on a loaded host a live
+        member, or the first call on an idle channel, can miss one short probe,
+        and a live member must not be reported gone. With `enough`, returns as
+        soon as that many answered (the count is then at least `enough`).
         """
+        loop = asyncio.get_running_loop()
+        end = loop.time() + PROBE_WINDOW
 
         async def probe(i: int) -> bool:
-            for _ in range(2):
+            refusals = 0
+            while True:
+                timeout = max(0.05, min(PROBE_TIMEOUT, end - loop.time()))
                 try:
-                    await self._maint[i].Status(rpc.StatusRequest(), timeout=PROBE_TIMEOUT)
+                    await self._maint[i].Status(rpc.StatusRequest(), timeout=timeout)
                     return True
-                except grpc.aio.AioRpcError:
-                    continue
-            return False
+                except grpc.aio.AioRpcError as error:
+                    log.debug("probe of etcd %s: %s", self.endpoints[i], error.details())
+                    if error.code() != grpc.StatusCode.DEADLINE_EXCEEDED:
+                        refusals += 1
+                        if refusals == 2:
+                            return False
+                        await asyncio.sleep(0.1)
+                if loop.time() >= end:
+                    return False
 
-        return sum(await asyncio.gather(*(probe(i) for i in range(len(self.endpoints)))))
+        probes = [asyncio.ensure_future(probe(i)) for i in range(len(self.endpoints))]
+        answered = 0
+        try:
+            for done in asyncio.as_completed(probes):
+                answered += await done
+                if enough is not None and answered >= enough:
+                    break
+        finally:
+            for task in probes:
+                task.cancel()
+        return answered
 
     async def leader(self) -> int | None:
         """Return the index of the member that leads now, or None if none answers as leader."""
@@ -203,7 +227,8 @@ class EtcdClient:
                 if self._current == i:
                     self.rotate()
                 if failures == 1 or loop.time() >= end:
-                    reachable = await self.reachable()
+                    # the first failure only asks whether a quorum is there; the last one counts
+                    reachable = await self.reachable(self.majority if loop.time() < end else None)
                     if reachable < self.majority:
                         raise NoQuorum(reachable, len(self.endpoints)) from error
                     if loop.time() >= end:
