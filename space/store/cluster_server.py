@@ -20,7 +20,6 @@ import hashlib
 import logging
 import queue
 import socket
-import threading
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -126,8 +125,7 @@ class ClusterStoreServer(Serving):
         for name in db.spaces():
             self._space(name)
         self._node.start()
-        self._worker = threading.Thread(target=self._run, name="tspace-replica", daemon=True)
-        self._worker.start()
+        self._start_worker(self._run, "tspace-replica")
         # complete=True: a client's request goes to one replica (the nearest), not to all.
         self._declared = self._declare_services(complete=True)
         log.info(
@@ -151,6 +149,7 @@ class ClusterStoreServer(Serving):
         writer = self._writer
         assert writer is not None
         while True:
+            self._beat()
             if time.monotonic() >= next_beat:
                 self._heartbeat()
                 next_beat = time.monotonic() + HEARTBEAT

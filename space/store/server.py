@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import logging
 import queue
-import threading
 import time
 from pathlib import Path
 
@@ -96,8 +95,7 @@ class StoreServer(Serving):
         self._leases.load(self._db)
         for name in self._db.spaces():
             self._space(name)
-        self._worker = threading.Thread(target=self._run, name="tspace-store", daemon=True)
-        self._worker.start()
+        self._start_worker(self._run, "tspace-store")
         self._declared = self._declare_services(complete=False)
         log.info("store: %d space(s) from %s", len(self._spaces), self._db.path)
 
@@ -106,6 +104,7 @@ class StoreServer(Serving):
     def _run(self) -> None:
         next_beat = time.monotonic()
         while True:
+            self._beat()
             if time.monotonic() >= next_beat:
                 self._publish_seqs()
                 self._writer.probe(self._readers.running)

@@ -22,6 +22,7 @@ from space.store.db import StoreDB
 from space.store.guard import writer_of
 from space.store.publish import Publisher
 from space.store.readers import Readers
+from space.store.watchdog import Watchdog
 from space.store.writer import Request
 
 
@@ -38,6 +39,7 @@ class Serving:
         self._publisher = Publisher(self.session, self.root)
         self._db: StoreDB | None = None
         self._worker: threading.Thread | None = None
+        self._watchdog: Watchdog | None = None
         self._declared: list = []
 
     def close(self) -> None:
@@ -49,12 +51,27 @@ class Serving:
             self._queue.put(None)
             self._worker.join()
             self._worker = None
+        if self._watchdog is not None:
+            self._watchdog.close()
+            self._watchdog = None
         self._stop()
         self._readers.close()
         self._publisher.close()
         if self._db is not None:
             self._db.close()
             self._db = None
+
+    def _start_worker(self, run: Callable[[], None], name: str) -> None:
+        """Start the thread that decides and commits, and a watchdog that says when it is stuck."""
+        self._worker = threading.Thread(target=run, name=name, daemon=True)
+        self._watchdog = Watchdog(self._worker, f"the store's {name} thread")
+        self._worker.start()
+        self._watchdog.start()
+
+    def _beat(self) -> None:
+        """Tell the watchdog the worker finished a turn (from the worker)."""
+        assert self._watchdog is not None
+        self._watchdog.beat()
 
     def _stop(self) -> None:
         """Close what the worker fed once it has stopped (a subclass's own parts)."""
