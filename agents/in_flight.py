@@ -34,8 +34,11 @@ class InFlight:
         self._unacked.append((cs, ts.send_later(cs, timeout=self._timeout)))
         return max(0, len(self._unacked) - IN_FLIGHT)
 
-    def settle(self, ts: TripleSpace, count: int | None = None) -> bool:
+    def settle(self, ts: TripleSpace, count: int | None = None, *, wait: bool = True) -> bool:
         """Read the acknowledgements of `count` answers (all by default), oldest first.
+
+        Without `wait`, only those already in: from the oldest up to the first one
+        still on its way.
 
         Returns:
             True when the store did not take one; then every answer in flight is
@@ -43,6 +46,8 @@ class InFlight:
         """
         lost = False
         while self._unacked and (count is None or count > 0):
+            if not wait and not self._unacked[0][1].ready():
+                break
             cs, pending = self._unacked.popleft()
             try:
                 self._acknowledged(ts, cs, pending)

@@ -17,6 +17,9 @@ Two cases, into a space already holding 100,000 inferred triples:
   parts of at most 4 KB of predicates in their keys, and puts each):
   the writer thread's CPU in `PartPublisher.publish`, median of the last 50 (its keys come
   back every time, as those of a reasoner's answer do);
+- `fleet`: fleet.py's sustained load as the saturated store takes it: 200 robots' sensor
+  changes (a reading replaced), one changeset each, decided and committed in one batch:
+  the writer thread's CPU a write;
 - `bulk`: 200,000 new triples in changesets of 10,000, as `tspace write` of a big file
   sends them (10 triples a subject, space_bench's document): CPU microseconds a triple of
   the writer thread (decoding and checking, deciding, committing) and of the whole process
@@ -136,8 +139,10 @@ def main(rounds: int) -> None:
             write(_flipped(k % 2 == 1, first=k == 0), clock=time.thread_time)
             for k in range(rounds + 1)
         ]
+        fleet = _fleet_batches(writer, session, rounds)
         figures = {
             "one triple, whole write (us)": _median_us(one[rounds:]),
+            "fleet: 200 sensor writes in one batch, writer thread (us CPU a write)": fleet,
             "200 settings flipped, whole write (us CPU)": _median_us(flips[1:]),
             "200 replaced, whole write (us)": _median_us(whole[1:]),
             "200 replaced, StoreDB.commit (us)": _median_us(commits[1:]),
@@ -177,6 +182,35 @@ def main(rounds: int) -> None:
         db.close()
     figures.update(served(1000))
     print(json.dumps(figures))
+
+
+def _fleet_batches(writer: Writer, session: zenoh.Session, rounds: int) -> float:
+    """Return the median writer-thread CPU microseconds a write of fleet.py's sustained load.
+
+    200 robots' sensor changes (each one reading replaced by the next, one changeset
+    each, with an id and a stamp), decided and committed as one batch, as the saturated
+    store's worker takes them (see the module's doc).
+    """
+
+    def reading(k: int, r: int) -> list[str]:
+        return [f"<urn:f:robot{k}_battery>", "<urn:f:charge_percent>", f'"{r}"^^<{INT}>']
+
+    def batch(r: int) -> float:
+        pending: list = []
+        start = time.thread_time()
+        for k in range(200):
+            wire = {"v": WIRE_VERSION, "id": uuid.uuid4().hex, "agent": f"robot{k}"}
+            wire["ts"] = str(session.new_timestamp())
+            wire["add"] = [reading(k, r)]
+            if r:
+                wire["del"] = [reading(k, r - 1)]
+            req = Request("write", "fleet", pack(wire), None, "tspace/fleet/@/write")
+            writer.write(req, pending)
+        writer.commit(pending)
+        return (time.thread_time() - start) / 200
+
+    per_write = [batch(r) for r in range(rounds + 2)]
+    return _median_us(per_write[2:])
 
 
 def _parts(session: zenoh.Session, write: Callable[[dict], float], endpoint: str) -> float:

@@ -123,8 +123,9 @@ class Pending:
     """A request sent to the store whose reply is read later: `ask_store`'s non-blocking twin.
 
     Constructing it sends the request and returns at once; `result()` blocks for
-    the reply. Requests from one session reach the store in the order they were
-    sent, so a caller may send several before reading their replies (pipelining).
+    the reply, `ready()` tells without blocking whether it would. Requests from
+    one session reach the store in the order they were sent, so a caller may send
+    several before reading their replies (pipelining).
     A request that found no store at all is sent again by `result()`, until its
     timeout, as `ask_store` does: after any sent since.
     """
@@ -136,6 +137,21 @@ class Pending:
         self._timeout = timeout
         self._deadline = time.monotonic() + timeout
         self._replies = _send(session, key, payload, timeout)
+        self._got: list[zenoh.Reply] = []
+        self._ended = False
+
+    def ready(self) -> bool:
+        """Return whether the request ended (answered, refused or timed out), without waiting."""
+        while not self._ended:
+            try:
+                reply = self._replies.try_recv()
+            except zenoh.ZError:  # the channel is closed: every reply is in
+                self._ended = True
+                break
+            if reply is None:
+                return False
+            self._got.append(reply)
+        return True
 
     def result(self) -> dict:
         """Wait for the reply and return it decoded.
@@ -143,7 +159,7 @@ class Pending:
         Raises:
             SpaceUnavailable, SpaceTimeout, QueryError, ChangesetRejected: as `ask_store`.
         """
-        replies = list(self._replies)
+        replies = self._got if self._ended else [*self._got, *self._replies]
         left = self._deadline - time.monotonic()
         if not replies and left >= 0.05:
             plain = _plain(self._session)  # a timeout of its own: no querier declared for it

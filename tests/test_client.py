@@ -1,6 +1,7 @@
 """The TSC operations of TripleSpace against a real router + store process."""
 
 import threading
+import time
 from itertools import pairwise
 from pathlib import Path
 
@@ -241,6 +242,18 @@ def test_changesets_sent_later_are_applied_in_order_and_acknowledged(ts):
     seqs = [p.result()["seq"] for p in pending]
     assert seqs == list(range(seqs[0], seqs[0] + len(pending)))  # each applied, in order
     assert set(ts.query((*level, None))) == {(*level, Literal("very low"))}
+
+
+def test_a_changeset_sent_later_tells_when_its_acknowledgement_is_in_without_waiting(ts):
+    ts.write(ROBOT)
+    pending = ts.send_later(ts.changeset([(AC.robot1_battery, AC.charge_percent, Literal(7))]))
+    wait_for(pending.ready, 5, "the acknowledgement")
+    assert pending.ready(), "stays ready"
+    started = time.monotonic()
+    seq = pending.result()["seq"]
+    assert time.monotonic() - started < 0.05, "read at once, not waited for"
+    assert ts.query((AC.robot1_battery, AC.charge_percent, None))
+    assert seq == ts.seq()
 
 
 def test_send_later_without_a_store_fails_at_result(tmp_path):

@@ -137,9 +137,13 @@ def write_request(payload: bytes) -> WriteRequest:
         req.plain = oxterms.plain_rows(lists[0])
         if req.plain is not None:
             return req
-    req.added, req.removed, req.inferred_added, req.inferred_removed = (
-        oxterms.triples(listed) for listed in lists
-    )
+    # One parse for every list: most writes are small, and a parse has a cost of its own.
+    parsed = oxterms.triples([row for listed in lists for row in listed]) if count else []
+    split, first = [], 0
+    for listed in lists:
+        split.append(parsed[first : first + len(listed)])
+        first += len(listed)
+    req.added, req.removed, req.inferred_added, req.inferred_removed = split
     return req
 
 
