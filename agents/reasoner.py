@@ -22,7 +22,6 @@ import argparse
 import logging
 import sys
 from collections.abc import Callable
-from pathlib import Path
 
 import zenoh
 from rdflib import OWL, RDF
@@ -35,6 +34,7 @@ from agents.firings import FIRING_PREFIX, FiringLog, without_records
 from agents.in_flight import InFlight
 from agents.knowledge import Knowledge
 from agents.ownership import PREFIX, Roster, concerned_robot, firing_robot
+from agents.reasoner_options import add_reasoner_arguments
 from agents.vocabulary import local_name
 from agents.writers import Writers
 from space import (
@@ -94,39 +94,8 @@ class Reasoner(Agent):
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
-        """Add the knowledge options."""
-        parser.add_argument(
-            "--rules",
-            action="append",
-            type=Path,
-            metavar="FILE",
-            help="Jena rules file (repeatable; default rules/selfconfig.rules)",
-        )
-        parser.add_argument(
-            "--ontology",
-            action="append",
-            type=Path,
-            metavar="FILE",
-            help="ontology file (repeatable; default ontology/selfconfig.ttl)",
-        )
-        parser.add_argument(
-            "--robot-file",
-            type=Path,
-            metavar="FILE",
-            help="a robot description written into the space if its robot is not there",
-        )
-        parser.add_argument(
-            "--keep-firings",
-            type=int,
-            default=100,
-            metavar="N",
-            help="firing records kept in the space (default 100)",
-        )
-        parser.add_argument(
-            "--per-robot",
-            action="store_true",
-            help="one reasoner per robot: answer for --robot (see agents.ownership)",
-        )
+        """Add the knowledge options (`agents.reasoner_options`)."""
+        add_reasoner_arguments(parser)
 
     # Start
 
