@@ -6,9 +6,28 @@ import logging
 import re
 import threading
 import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 
 from conftest import wait_for
 from space.store.watchdog import Watchdog
+
+WHAT = "the store's tspace-store thread"
+
+
+@contextmanager
+def _watched(work: Callable[[Watchdog], None], done: threading.Event) -> Iterator[None]:
+    """Run `work(watchdog)` on a thread watched after 0.3 s; on exit set `done` and join."""
+    thread = threading.Thread(target=lambda: work(watchdog))
+    watchdog = Watchdog(thread, WHAT, after=0.3)
+    thread.start()
+    watchdog.start()
+    try:
+        yield
+    finally:
+        done.set()
+        thread.join()
+        watchdog.close()
 
 
 def _blocked_in_a_put(release: threading.Event, watchdog: Watchdog) -> None:
@@ -20,42 +39,25 @@ def _blocked_in_a_put(release: threading.Event, watchdog: Watchdog) -> None:
 def test_a_stuck_writer_thread_is_logged_with_its_stack_then_its_return(caplog):
     caplog.set_level(logging.WARNING, logger="tspace.store")
     release = threading.Event()
-    thread = threading.Thread(target=lambda: _blocked_in_a_put(release, watchdog))
-    watchdog = Watchdog(thread, "the store's tspace-store thread", after=0.3)
-    thread.start()
-    watchdog.start()
-    try:
+    with _watched(lambda w: _blocked_in_a_put(release, w), release):
         wait_for(lambda: "has not finished a turn" in caplog.text, 5, "the stall warning")
         warning = caplog.text
-        assert re.search(
-            r"the store's tspace-store thread has not finished a turn for 0\.\d s", warning
-        )
+        assert re.search(rf"{WHAT} has not finished a turn for 0\.\d s", warning)
         assert "_blocked_in_a_put" in warning and "release.wait()" in warning
         time.sleep(0.6)
         assert caplog.text.count("has not finished a turn") == 1, "warned once per stall"
         release.set()
         wait_for(lambda: "went on after" in caplog.text, 5, "the return")
-    finally:
-        release.set()
-        thread.join()
-        watchdog.close()
 
 
 def test_a_thread_that_turns_is_never_reported(caplog):
     caplog.set_level(logging.WARNING, logger="tspace.store")
     stop = threading.Event()
-    watchdog: Watchdog
 
-    def turning() -> None:
+    def turning(watchdog: Watchdog) -> None:
         while not stop.wait(0.05):
             watchdog.beat()
 
-    thread = threading.Thread(target=turning)
-    watchdog = Watchdog(thread, "the writer", after=0.3)
-    thread.start()
-    watchdog.start()
-    time.sleep(1.0)
-    stop.set()
-    thread.join()
-    watchdog.close()
+    with _watched(turning, stop):
+        time.sleep(1.0)
     assert "has not finished a turn" not in caplog.text
