@@ -179,7 +179,8 @@ class TripleSpace(Reads, Watching):
         """Send a changeset now and read the acknowledgement later (`send`'s pipelined twin).
 
         Returns at once; `result()` of what it returns blocks as `send` does and
-        raises what `send` raises. Changesets sent one after the other are applied
+        raises what `send` raises; its `ready()` says, without blocking, whether
+        `result()` would return at once. Changesets sent one after the other are applied
         in that order, so a writer may keep several in flight.
         """
         return Pending(self._queriers, self._key("write"), cs.encode(), timeout, what="write")
