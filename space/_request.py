@@ -123,7 +123,7 @@ class Pending:
     """A request sent to the store whose reply is read later: `ask_store`'s non-blocking twin.
 
     Constructing it sends the request and returns at once; `result()` blocks for
-    the reply, `ready()` tells without blocking whether it would. Requests from
+    the reply, `ready()` tells without blocking whether the request ended. Requests from
     one session reach the store in the order they were sent, so a caller may send
     several before reading their replies (pipelining).
     A request that found no store at all is sent again by `result()`, until its

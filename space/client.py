@@ -180,8 +180,9 @@ class TripleSpace(Reads, Watching):
 
         Returns at once; `result()` of what it returns blocks as `send` does and
         raises what `send` raises; its `ready()` says, without blocking, whether
-        `result()` would return at once. Changesets sent one after the other are applied
-        in that order, so a writer may keep several in flight.
+        the store's reply is in (or the request ended without one). Changesets
+        sent one after the other are applied in that order, so a writer may keep
+        several in flight.
         """
         return Pending(self._queriers, self._key("write"), cs.encode(), timeout, what="write")
 
