@@ -12,8 +12,9 @@ import zenoh
 from rdflib import Graph
 
 from space import keys
+from space._dispatch import Dispatcher
 from space._request import Queriers, ask_store
-from space._subscription import Dispatcher, Subscription
+from space._subscription import Subscription
 from space.changeset import pack
 from space.errors import TemplateError
 from space.lifespan import check_lifespan

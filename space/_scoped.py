@@ -29,9 +29,10 @@ from dataclasses import dataclass
 import zenoh
 
 from space import keys
+from space._dispatch import Dispatcher
 from space._parts import BURST, Part, PartKey, joined, only, split, term_chunk
 from space._scope import Matcher, exact, patterns, selector_key, through
-from space._subscription import LATEST, Callback, Change, Dispatcher, Fetch, Subscription
+from space._subscription import LATEST, Callback, Change, Fetch, Subscription
 from space.changeset import published_seq, unpack
 from space.errors import MalformedPayload, SpaceError
 from space.template import Template

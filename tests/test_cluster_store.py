@@ -128,10 +128,10 @@ def test_a_scoped_subscriber_gets_what_another_replica_decided(replicas: list[Se
 
 def test_a_replica_ends_a_changeset_of_many_parts(replicas: list[Server], monkeypatch) -> None:
     """A replica publishes the end after a changeset's parts: one delivery, without a hold."""
-    import space._subscription
+    import space._dispatch
 
-    monkeypatch.setattr(space._subscription, "IDLE", 60.0)
-    monkeypatch.setattr(space._subscription, "HOLD_MAX", 60.0)
+    monkeypatch.setattr(space._dispatch, "IDLE", 60.0)
+    monkeypatch.setattr(space._dispatch, "HOLD_MAX", 60.0)
     seen: list = []
     with _open(replicas[2], "ends") as c:
         c.subscribe(None, seen.append, scope=[(_s(1), None)])

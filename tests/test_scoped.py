@@ -273,10 +273,10 @@ def test_a_changeset_of_many_parts_is_delivered_at_its_end_not_after_a_hold(
     # The store publishes a changeset's end after its parts: each subscriber of a scope
     # delivers the parts it has heard as soon as the end came back through it. With
     # holds far longer than the test's deadline, only the end can make the delivery.
-    import space._subscription
+    import space._dispatch
 
-    monkeypatch.setattr(space._subscription, "IDLE", 60.0)
-    monkeypatch.setattr(space._subscription, "HOLD_MAX", 60.0)
+    monkeypatch.setattr(space._dispatch, "IDLE", 60.0)
+    monkeypatch.setattr(space._dispatch, "HOLD_MAX", 60.0)
     robot1 = [(AC.robot1_base, AC[f"setting_{i}"], Literal("low")) for i in range(settings)]
     robot1 += [(AC.robot1, AC[f"status_{i}"], Literal("ok")) for i in range(20)]
     hall = (AC.hall, AC.crowd_level, Literal("high"))
@@ -299,9 +299,9 @@ def test_an_end_comes_back_only_through_the_subscribers_that_may_have_its_parts(
     # answer that sets its base's settings goes back through the base's subscriber only
     # (each sample of it back costs a thread wake-up), one naming no predicate through
     # those of the subjects that match, one naming nothing through all.
+    from space._dispatch import Dispatcher
     from space._scope import selectors
     from space._scoped import ScopedSubscription
-    from space._subscription import Dispatcher
     from space.prefixes import PrefixMap
     from space.template import Template
 
@@ -325,15 +325,15 @@ def test_an_end_comes_back_only_through_the_subscribers_that_may_have_its_parts(
 def test_a_lost_end_costs_a_hold_not_the_parts(monkeypatch, reconnected):
     # No end comes (a cut): the parts of a changeset of many are delivered as one change
     # when the link comes back (`catch_up`), or, as a last resort, when no more came for IDLE.
-    import space._subscription
+    import space._dispatch
+    from space._dispatch import Dispatcher
     from space._parts import split
     from space._scoped import ScopedSubscription
-    from space._subscription import Dispatcher
     from space.template import Template
 
     if reconnected:
-        monkeypatch.setattr(space._subscription, "IDLE", 60.0)
-        monkeypatch.setattr(space._subscription, "HOLD_MAX", 60.0)
+        monkeypatch.setattr(space._dispatch, "IDLE", 60.0)
+        monkeypatch.setattr(space._dispatch, "HOLD_MAX", 60.0)
     triples = [[f"<{AC_NS}robot1_base>", f"<{AC_NS}setting_{i}>", '"low"'] for i in range(20)]
     wire = {"v": 1, "id": "c1", "agent": "w", "ts": "1/x", "seq": 1, "add": triples}
     seen: list = []
@@ -376,9 +376,9 @@ def test_a_robots_hw_monitor_hears_its_robot_and_the_site_not_the_fleet_nor_reco
 def test_a_malformed_part_costs_only_itself_not_the_parts_delivered_with_it(caplog):
     # The parts of one changeset received together are parsed once, at delivery: a bad
     # term in one of them must still leave the others' triples delivered.
+    from space._dispatch import Dispatcher
     from space._parts import split
     from space._scoped import ScopedSubscription
-    from space._subscription import Dispatcher
     from space.template import Template
 
     good = [[f"<{AC_NS}robot1_battery>", f"<{AC_NS}battery_level>", '"low"']]
@@ -469,10 +469,10 @@ def test_a_malformed_end_is_skipped_and_a_real_one_still_ends_the_wait(
     # Anyone can put on the ends' key: garbage there is logged and skipped, and the
     # real end of a changeset of many parts still delivers them (the holds are far
     # longer than the test's deadline: only the end can).
-    import space._subscription
+    import space._dispatch
 
-    monkeypatch.setattr(space._subscription, "IDLE", 60.0)
-    monkeypatch.setattr(space._subscription, "HOLD_MAX", 60.0)
+    monkeypatch.setattr(space._dispatch, "IDLE", 60.0)
+    monkeypatch.setattr(space._dispatch, "HOLD_MAX", 60.0)
     seen: list = []
     ts.subscribe(None, seen.append, scope=SCOPE)
     forged = [
