@@ -28,18 +28,17 @@ import time
 from collections.abc import Iterable
 
 import zenoh
-from rdflib import RDF
 from rdflib.term import Node
 
-from agents.vocabulary import AC, local_name
+from agents.vocabulary import AC, RDF_TYPE, local_name
 from space import KEY_ROOT, Triple, escape_key_chunk, unescape_key_chunk
 from space.reasoning import Engine, Firing
 
 PREFIX = "reasoner."
 
 
-# Looked up once: an rdflib namespace's attribute costs ~1 us, and these run per triple.
-_TYPE, _ROBOT, _BELONGS = RDF.type, AC.Robot, (AC.has_device, AC.has_skill)
+# Looked up once: these run per triple.
+_ROBOT, _BELONGS = AC.Robot, (AC.has_device, AC.has_skill)
 
 
 def reasoner_name(robot: Node) -> str:
@@ -49,7 +48,7 @@ def reasoner_name(robot: Node) -> str:
 
 def owner(engine: Engine, subject: Node) -> Node | None:
     """Return the robot `subject` is or belongs to (as a device or skill), or None."""
-    if (subject, _TYPE, _ROBOT) in engine:
+    if (subject, RDF_TYPE, _ROBOT) in engine:
         return subject
     for predicate in _BELONGS:
         for robot, _p, _o in engine.match(None, predicate, subject):
@@ -72,7 +71,7 @@ def firing_robot(engine: Engine, firing: Firing, robots: dict[Node, bool], defau
     for s, _p, _o in firing.triggers:
         is_robot = robots.get(s)
         if is_robot is None:
-            is_robot = robots[s] = (s, _TYPE, _ROBOT) in engine
+            is_robot = robots[s] = (s, RDF_TYPE, _ROBOT) in engine
         if is_robot:
             return s
     return default

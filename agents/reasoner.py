@@ -24,7 +24,7 @@ import sys
 from collections.abc import Callable
 
 import zenoh
-from rdflib import OWL, RDF
+from rdflib import OWL
 from rdflib.term import Node
 
 from agents.answers import Ledger, present_truth
@@ -35,7 +35,7 @@ from agents.in_flight import InFlight
 from agents.knowledge import Knowledge
 from agents.ownership import PREFIX, Roster, concerned_robot, firing_robot
 from agents.reasoner_options import add_reasoner_arguments
-from agents.vocabulary import local_name
+from agents.vocabulary import RDF_TYPE, local_name
 from agents.writers import Writers
 from space import (
     Change,
@@ -59,7 +59,7 @@ from space.reasoning import (
 )
 
 # Looked up once: an rdflib namespace's attribute costs ~1 us, once a triple added.
-_TYPE, _FUNCTIONAL = RDF.type, OWL.FunctionalProperty
+_FUNCTIONAL = OWL.FunctionalProperty
 
 
 class Reasoner(Agent):
@@ -222,7 +222,7 @@ class Reasoner(Agent):
         assert engine is not None
         change = replace_functional(
             added,
-            lambda p: (p, _TYPE, _FUNCTIONAL) in engine,
+            lambda p: (p, RDF_TYPE, _FUNCTIONAL) in engine,
             lambda s, p: [t[2] for t in engine.match(s, p)],
         )
         return [t for t in change.replaced if t not in removed]

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from decimal import Decimal
 
-from rdflib import Literal, Namespace, URIRef
+from rdflib import RDF, Literal, Namespace, URIRef
 
 from space import PrefixMap
 
@@ -28,6 +28,9 @@ class Vocabulary(Namespace):
 
 AC = Vocabulary("https://w3id.org/tspace/selfconfig#")
 PREFIXES = PrefixMap({"ac": str(AC)})
+# rdf:type, looked up once: an rdflib namespace's attribute costs ~1 us, and agents test it
+# once a triple.
+RDF_TYPE = RDF.type
 
 # Subjects of the reasoner's firing records (`ac:firing_N`, `ac:firing_ROBOT_N`).
 RECORD_PREFIX = str(AC) + "firing_"

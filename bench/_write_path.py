@@ -113,11 +113,10 @@ def main(rounds: int) -> None:
         subscriber = session.declare_subscriber("tspace/w/@/changes", lambda _s: None)
 
         def write(wire: dict, clock: Callable[[], float] = time.perf_counter) -> float:
-            wire.update(v=WIRE_VERSION, id=uuid.uuid4().hex, agent="bench")
-            wire["ts"] = str(session.new_timestamp())
+            req = _request(session, "w", "bench", wire)
             start = clock()
             pending: list = []
-            writer.write(Request("write", "w", pack(wire), None, "tspace/w/@/write"), pending)
+            writer.write(req, pending)
             writer.commit(pending)
             return clock() - start
 
@@ -199,18 +198,22 @@ def _fleet_batches(writer: Writer, session: zenoh.Session, rounds: int) -> float
         pending: list = []
         start = time.thread_time()
         for k in range(200):
-            wire = {"v": WIRE_VERSION, "id": uuid.uuid4().hex, "agent": f"robot{k}"}
-            wire["ts"] = str(session.new_timestamp())
-            wire["add"] = [reading(k, r)]
+            wire: dict = {"add": [reading(k, r)]}
             if r:
                 wire["del"] = [reading(k, r - 1)]
-            req = Request("write", "fleet", pack(wire), None, "tspace/fleet/@/write")
-            writer.write(req, pending)
+            writer.write(_request(session, "fleet", f"robot{k}", wire), pending)
         writer.commit(pending)
         return (time.thread_time() - start) / 200
 
     per_write = [batch(r) for r in range(rounds + 2)]
     return _median_us(per_write[2:])
+
+
+def _request(session: zenoh.Session, space: str, agent: str, wire: dict) -> Request:
+    """Return a write request of `wire` (its triples) as a client sends it: an id and a stamp."""
+    wire.update(v=WIRE_VERSION, id=uuid.uuid4().hex, agent=agent)
+    wire["ts"] = str(session.new_timestamp())
+    return Request("write", space, pack(wire), None, f"tspace/{space}/@/write")
 
 
 def _parts(session: zenoh.Session, write: Callable[[dict], float], endpoint: str) -> float:
