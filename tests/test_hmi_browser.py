@@ -341,12 +341,18 @@ def test_the_scenario_through_the_page_plots_the_battery_and_the_docking(page, d
     assert marks >= 1
 
     # A firing's why, one click away: the rule, its comment, down to who wrote the battery.
-    sentences = page.js(
-        f"[...document.querySelectorAll('{ROBOT} .firings .sentence')].map(s => s.textContent)"
-    )
-    n = next(i for i, s in enumerate(sentences) if s.startswith("battery very low →")) + 1
-    page.click(f"{ROBOT} .firings li:nth-child({n}) .why-link")
-    wait_for(lambda: page.js("document.getElementById('why-dialog').open"), 10, "the why dialog")
+    # The list is redrawn as firings come (the newest first): one that comes between finding
+    # the button and the mouse's click moves it from under the mouse, and a user clicks again.
+    def why_opened() -> bool:
+        sentences = page.js(
+            f"[...document.querySelectorAll('{ROBOT} .firings .sentence')].map(s => s.textContent)"
+        )
+        n = next(i for i, s in enumerate(sentences) if s.startswith("battery very low →")) + 1
+        page.click(f"{ROBOT} .firings li:nth-child({n}) .why-link")
+        time.sleep(0.5)
+        return page.js("document.getElementById('why-dialog').open")
+
+    wait_for(why_opened, 10, "the why dialog")
     wait_for(lambda: "by production rule" in (page.text("#why-body") or ""), 20, "the answer")
     answer = page.text("#why-body")
     assert "written by hmi" in answer, answer
