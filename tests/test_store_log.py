@@ -56,3 +56,28 @@ def test_compactions_after_a_restart_keep_exactly_the_latest_entries(tmp_path: P
             assert db.outcome("log", first.request) == (cut + 1, first.payload, first.dropped)
         finally:
             db.close()
+
+
+def test_a_retry_is_told_its_first_outcome_whenever_the_store_first_read_its_log(
+    tmp_path: Path,
+):
+    """Request ids are known from memory (`request_ids`): those committed after the log was
+    read are found, those cut with their entries are not, and a restart reads them again."""
+    db = StoreDB(tmp_path, log_keep=10)
+    try:
+        assert db.outcome("log", "req 1/x") is None  # the log is read here, empty
+        for seq in range(1, COMPACT_EVERY + 1):
+            db.commit([_entry(seq)])
+            if seq == 1:
+                assert db.outcome("log", "req 1/x") == (1, b"cs1", b"why 1")
+        assert db.outcome("log", "req 1/x") is None  # cut with its entry
+        assert db.outcome("log", f"req {COMPACT_EVERY - 9}/x") is not None
+    finally:
+        db.close()
+    db = StoreDB(tmp_path, log_keep=10)
+    try:
+        last = COMPACT_EVERY
+        assert db.outcome("log", f"req {last}/x") == (last, b"cs%d" % last, b"")
+        assert db.outcome("log", f"req {last - 10}/x") is None
+    finally:
+        db.close()

@@ -101,6 +101,7 @@ def replace_all(
         ops.append(f"DROP SILENT GRAPH <{log_graph(space).value}>")
     ops += revision_ops(db, revision)
     db.values.clear()
+    db.requests.clear()
     try:
         db.store.update(" ;\n".join(ops))
         db.store.flush()

@@ -44,6 +44,7 @@ from space.store.db_layout import (
 )
 from space.store.flusher import Flusher
 from space.store.oxterms import OxTerm, OxTriple
+from space.store.request_ids import RequestIds
 from space.store.values import Values
 
 log = logging.getLogger("tspace.store")
@@ -112,6 +113,7 @@ class StoreDB:
         # A cluster replica's revision quad(s) as its last commit left them (None: not read).
         self.revision_objects: list[str] | None = None
         self.values = Values()  # functional pairs' objects, triples of the latest commits
+        self.requests = RequestIds(self._logged_requests)  # which request ids the logs hold
         self._flusher = Flusher(lambda: self.store if hasattr(self, "store") else None)
 
     def close(self) -> None:
@@ -221,6 +223,7 @@ class StoreDB:
         except (OSError, RuntimeError) as exc:
             raise CommitFailed(f"the database could not commit: {exc}") from exc
         self.values.committed(entries)
+        self.requests.committed(entries)
         if revision is not None:
             from space.store.cluster_db import revision_written
 
@@ -260,6 +263,7 @@ class StoreDB:
         self.store = None  # type: ignore[assignment]
         self.revision_objects = None  # read again from what the reopened database holds
         self.values.clear()
+        self.requests.clear()
         gc.collect()
         p, m, st = f"{ROOT}probe", META.value, STORE.value
         try:
@@ -308,6 +312,7 @@ class StoreDB:
             return
         if cut > 0:
             self._cut[space] = cut
+            self.requests.cut(space, cut)
 
     def log(self, space: str, first: int, last: int) -> list[tuple[int, bytes]]:
         """Return the logged changesets `first..last` (inclusive) still kept."""
@@ -324,6 +329,8 @@ class StoreDB:
 
         `dropped` is the msgpack list the writer was told was not applied (b"" if none).
         """
+        if not self.requests.may_hold(space, request):
+            return None
         g = log_graph(space)
         for q in self.store.quads_for_pattern(None, request_node(request), None, g):
             dropped = b""
@@ -332,6 +339,16 @@ class StoreDB:
             seq = int(q.subject.value.rsplit(":", 1)[1])
             return seq, base64.b64decode(q.object.value), dropped
         return None
+
+    def _logged_requests(self, space: str) -> Iterator[tuple[int, str]]:
+        """Yield `(seq, request-id IRI)` of each entry of a space's log that answered an id."""
+        g = log_graph(space)
+        rows = self.store.query(
+            f"SELECT ?e ?p WHERE {{ GRAPH <{g.value}> {{ ?e ?p ?o }} "
+            f'FILTER(STRSTARTS(STR(?p), "{REQUESTS}")) }}'
+        )
+        for row in rows:
+            yield int(row[0].value.rsplit(":", 1)[1]), row[1].value
 
     def prefixes(self, space: str) -> dict[str, str]:
         """Return the prefix bindings registered in a space."""

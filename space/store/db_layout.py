@@ -74,13 +74,14 @@ def entry_node(space: str, seq: int) -> ox.NamedNode:
 
 def request_node(request: str) -> ox.NamedNode:
     """Return the predicate of the log entry that answered request id `request`."""
-    return ox.NamedNode(_request_iri(request))
+    return ox.NamedNode(request_iri(request))
 
 
 _UNRESERVED = re.compile(r"[A-Za-z0-9_.~-]+").fullmatch  # what percent-encoding leaves as is
 
 
-def _request_iri(request: str) -> str:
+def request_iri(request: str) -> str:
+    """Return the IRI a request id's log entry is found by (its predicate)."""
     # Request ids are mostly hex: quote() of one is itself, and costs more than this check.
     return REQUESTS + (request if _UNRESERVED(request) else quote(request, safe=""))
 
@@ -124,7 +125,7 @@ def log_rows(
     they are (`render`), a few microseconds less a changeset than terms printed.
     """
     entry = f"<{ROOT}log:{space}:{seq}>"
-    answered = f"<{_request_iri(request)}>" if request else _PAYLOAD
+    answered = f"<{request_iri(request)}>" if request else _PAYLOAD
     rows = [(entry, answered, f'"{base64.b64encode(payload).decode("ascii")}"')]
     if dropped:
         rows.append((entry, _DROPPED, f'"{base64.b64encode(dropped).decode("ascii")}"'))
