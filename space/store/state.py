@@ -110,8 +110,8 @@ class SpaceState:
         """
         if req.plain is not None:
             return self._decide_plain(req, req.plain, stamp), []
-        kept, replaced, dropped = self._functional_additions(req.added, stamp)
-        removed, added = self._net("t", req.removed + replaced, kept)
+        kept, replaced, dropped, known = self._functional_additions(req.added, stamp)
+        removed, added = self._net("t", req.removed + replaced, kept, known)
         i_removed, i_added = self._net("i", req.inferred_removed, req.inferred_added)
         if self.leases is not None:
             self.leases.decide(self.name, req.id, req.lifespan, kept, removed)
@@ -250,11 +250,18 @@ class SpaceState:
 
     def _functional_additions(
         self, added: list[OxTriple], stamp: str
-    ) -> tuple[list[OxTriple], list[OxTriple], list[dict]]:
-        """Split additions into those kept, the old values they replace, and those dropped."""
+    ) -> tuple[list[OxTriple], list[OxTriple], list[dict], dict[OxTriple, bool]]:
+        """Split additions into those kept, the old values they replace, and those dropped.
+
+        Also returns whether the asserted graph holds each functional triple kept or
+        replaced: the objects of its pair were read whole, so `_net` need not look
+        them up (a sensor's new reading is in no recent commit, and the database's
+        answer that it is absent cost a RocksDB iterator).
+        """
         kept: list[OxTriple] = []
         replaced: list[OxTriple] = []
         dropped: list[dict] = []
+        known: dict[OxTriple, bool] = {}
         latest: dict[tuple[OxTerm, OxTerm], OxTriple] = {}
         for t in added:
             if t[1] in self._functional:
@@ -278,8 +285,12 @@ class SpaceState:
                     dropped.append(_dropped(t, why))
                 continue
             kept.append(t)
-            replaced.extend((s, p, o) for o in objects if o != t[2])
-        return kept, replaced, dropped
+            known[t] = t[2] in objects
+            for o in objects:
+                if o != t[2]:
+                    replaced.append((s, p, o))
+                    known[(s, p, o)] = True
+        return kept, replaced, dropped, known
 
     def _objects(self, s: OxTerm, p: OxTerm) -> list[OxTerm]:
         overlay = self._overlay
@@ -299,11 +310,24 @@ class SpaceState:
         return held if held is not None else self.db.has(self.name, which, t)
 
     def _net(
-        self, which: str, removed: list[OxTriple], added: list[OxTriple]
+        self,
+        which: str,
+        removed: list[OxTriple],
+        added: list[OxTriple],
+        known: dict[OxTriple, bool] | None = None,
     ) -> tuple[list[OxTriple], list[OxTriple]]:
-        """Return what removing then adding really changes in a graph; note it in the overlay."""
-        gone = {t: None for t in removed if self._has(which, t)}
-        new = {t: None for t in added if t in gone or not self._has(which, t)}
+        """Return what removing then adding really changes in a graph; note it in the overlay.
+
+        `known`: whether the graph holds some of the triples, already read.
+        """
+        read = known or {}
+
+        def has(t: OxTriple) -> bool:
+            held = read.get(t)
+            return self._has(which, t) if held is None else held
+
+        gone = {t: None for t in removed if has(t)}
+        new = {t: None for t in added if t in gone or not has(t)}
         net_removed = [t for t in gone if t not in new]
         net_added = [t for t in new if t not in gone]
         self._intend(which, net_removed, net_added)
