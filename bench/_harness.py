@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import socket
 import statistics
 import subprocess
@@ -14,6 +15,16 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from space import SpaceError, TripleSpace, load_identity
+
+
+def _stop_on_sigterm(signum: int, _frame: object) -> None:
+    raise SystemExit(128 + signum)
+
+
+# A bench stopped by `kill` (SIGTERM) unwinds as on Ctrl-C, so that the `finally` blocks
+# stop the store and agent processes it started: by default they outlived it.
+if signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
+    signal.signal(signal.SIGTERM, _stop_on_sigterm)
 
 
 def free_port() -> int:
