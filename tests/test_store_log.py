@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 from space.store.db import COMPACT_EVERY, StoreDB
@@ -65,11 +66,12 @@ def test_a_retry_is_told_its_first_outcome_whenever_the_store_first_read_its_log
     read are found, those cut with their entries are not, and a restart reads them again."""
     db = StoreDB(tmp_path, log_keep=10)
     try:
-        assert db.outcome("log", "req 1/x") is None  # the log is read here, empty
+        assert db.outcome("log", "req 1/x") is None  # the log is read from here, empty
         for seq in range(1, COMPACT_EVERY + 1):
             db.commit([_entry(seq)])
             if seq == 1:
                 assert db.outcome("log", "req 1/x") == (1, b"cs1", b"why 1")
+                _known(db)
         assert db.outcome("log", "req 1/x") is None  # cut with its entry
         assert db.outcome("log", f"req {COMPACT_EVERY - 9}/x") is not None
     finally:
@@ -77,7 +79,17 @@ def test_a_retry_is_told_its_first_outcome_whenever_the_store_first_read_its_log
     db = StoreDB(tmp_path, log_keep=10)
     try:
         last = COMPACT_EVERY
+        assert db.outcome("log", f"req {last}/x") == (last, b"cs%d" % last, b"")  # looked up
+        _known(db)
         assert db.outcome("log", f"req {last}/x") == (last, b"cs%d" % last, b"")
         assert db.outcome("log", f"req {last - 10}/x") is None
     finally:
         db.close()
+
+
+def _known(db: StoreDB) -> None:
+    """Wait until the store knows the log's ids from memory (read on a thread of their own)."""
+    deadline = time.monotonic() + 10
+    while not db.requests.known("log"):
+        assert time.monotonic() < deadline, "the log's request ids were not read in 10 s"
+        time.sleep(0.01)

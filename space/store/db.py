@@ -119,6 +119,7 @@ class StoreDB:
     def close(self) -> None:
         """Flush and let go of the database (the last reference closes it)."""
         self._flusher.close()
+        self.requests.clear()
         try:
             self.store.flush()
         except OSError as exc:
