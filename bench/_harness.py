@@ -18,6 +18,7 @@ from space import SpaceError, TripleSpace, load_identity
 
 
 def _stop_on_sigterm(signum: int, _frame: object) -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second one must not cut the cleanup short
     raise SystemExit(128 + signum)
 
 

@@ -223,8 +223,8 @@ class StoreDB:
                 self.store.update(" ;\n".join(ops))
         except (OSError, RuntimeError) as exc:
             raise CommitFailed(f"the database could not commit: {exc}") from exc
+        self.requests.committed(entries)  # first: a log entry it missed would be applied twice
         self.values.committed(entries)
-        self.requests.committed(entries)
         if revision is not None:
             from space.store.cluster_db import revision_written
 
