@@ -256,7 +256,9 @@ class SpaceState:
         Also returns whether the asserted graph holds each functional triple kept or
         replaced: the objects of its pair were read whole, so `_net` need not look
         them up (a sensor's new reading is in no recent commit, and the database's
-        answer that it is absent cost a RocksDB iterator).
+        answer that it is absent cost a RocksDB iterator). Additions come with their
+        literals in the database's canonical form (`oxterms.canonical_all`), so they
+        compare with the objects read as the database compares them.
         """
         kept: list[OxTriple] = []
         replaced: list[OxTriple] = []
