@@ -7,6 +7,8 @@ it, N settings flipped (N removed, N added) in one SPARQL update, on an Oxigraph
 holding `--background` other triples, in either place (in turns, `--rounds` times each, a
 fresh store each time); and the same through `Store.remove` and `Store.extend` (no SPARQL
 text to parse), to tell parsing from storing. Medians of all the flips, milliseconds.
+(`bench/floors.py` times more ways of writing, into a named graph only; its default-graph
+row is a load into a graph that holds nothing else, where here both places hold the same.)
 
     python bench/graph_layout.py [--settings 200] [--runs 40] [--rounds 3] [--background 20000]
 """
