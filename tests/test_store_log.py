@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
+from conftest import wait_for
 from space.store.db import COMPACT_EVERY, StoreDB
 from space.store.db_layout import Entry
 
@@ -89,7 +89,4 @@ def test_a_retry_is_told_its_first_outcome_whenever_the_store_first_read_its_log
 
 def _known(db: StoreDB) -> None:
     """Wait until the store knows the log's ids from memory (read on a thread of their own)."""
-    deadline = time.monotonic() + 10
-    while not db.requests.known("log"):
-        assert time.monotonic() < deadline, "the log's request ids were not read in 10 s"
-        time.sleep(0.01)
+    wait_for(lambda: db.requests.known("log"), 10, "the log's request ids read")

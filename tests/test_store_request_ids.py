@@ -8,6 +8,7 @@ from collections.abc import Iterator
 
 import pytest
 
+from conftest import wait_for
 from space.store import request_ids
 from space.store.db_layout import Entry, request_iri
 from space.store.request_ids import RequestIds
@@ -36,10 +37,7 @@ def _entry(seq: int) -> Entry:
 
 
 def _known(ids: RequestIds) -> None:
-    deadline = time.monotonic() + 10
-    while not ids.known("s"):
-        assert time.monotonic() < deadline
-        time.sleep(0.01)
+    wait_for(lambda: ids.known("s"), 10, "the log's request ids read")
 
 
 def test_ids_committed_and_cut_while_the_log_is_read_are_counted():
@@ -70,9 +68,7 @@ def test_a_failed_read_of_the_log_is_tried_again(monkeypatch):
     log.release.set()
     ids = RequestIds(log.load)
     ids.may_hold("s", "r1")
-    deadline = time.monotonic() + 10
-    while log.reads < 1 or ids.known("s"):
-        assert time.monotonic() < deadline
+    wait_for(lambda: log.reads >= 1, 10, "the log read")
     time.sleep(0.1)
     assert not ids.known("s")  # failed: looked up
     ids.committed([_entry(4)])

@@ -105,8 +105,7 @@ class RequestIds:
 
     def known(self, space: str) -> bool:
         """Return whether the space's ids are read, so that a new id skips the log."""
-        self.may_hold(space, "")
-        return space in self._spaces
+        return space in self._spaces or self._read(space) is not None
 
     def committed(self, entries: list[Entry]) -> None:
         """Add the request ids of a batch just committed."""
@@ -119,7 +118,7 @@ class RequestIds:
                 held[hash(request_iri(e.request))] = e.seq
                 self._size += len(held) - before
                 if self._size > LIMIT:
-                    self._drop(e.space, "more than %d request ids in all")
+                    self._drop(e.space)
             elif (reading := self._reading.get(e.space)) is not None:
                 reading.since.append((e.seq, hash(request_iri(e.request))))
 
@@ -168,11 +167,12 @@ class RequestIds:
         held = self._spaces[space] = reading.result()
         self._size += len(held)
         if self._size > LIMIT:
-            self._drop(space, "more than %d request ids in all")
+            self._drop(space)
             return None
         return held
 
-    def _drop(self, space: str, why: str) -> None:
+    def _drop(self, space: str) -> None:
+        """Forget a space's ids past `LIMIT` in all: looked up in its log until `clear`."""
         self._size -= len(self._spaces.pop(space))
-        self._later[space] = float("inf")  # until `clear`
-        log.info("request ids of %s looked up in its log: " + why, space, LIMIT)
+        self._later[space] = float("inf")
+        log.info("request ids of %s looked up in its log: more than %d in all", space, LIMIT)
