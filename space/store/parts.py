@@ -26,6 +26,7 @@ from space import keys
 from space._parts import BURST, PartKey, cut, end, grouped, made_chunks
 from space.changeset import LISTS, pack
 from space.store.state import Net, SpaceState
+from space.store.watched import Watched
 
 log = logging.getLogger("tspace.store")
 
@@ -43,14 +44,16 @@ class PartPublisher:
         self.root = root
         self._last: dict[str, dict[PartKey, int]] = {}  # space -> pair -> seq of its last part
         self._floor: dict[str, int] = {}
-        self._watchers: dict[str, zenoh.Publisher] = {}
+        self._watchers: dict[str, Watched] = {}
         self._ends: dict[str, zenoh.Publisher] = {}
         self._often = _Often(session)
         self._packer = msgpack.Packer(use_bin_type=True)  # as `space.changeset.pack`, made once
 
     def close(self) -> None:
         """Undeclare the publishers of ends and those used to learn whether anyone selects parts."""
-        for publisher in [*self._watchers.values(), *self._ends.values()]:
+        for watched in self._watchers.values():
+            watched.close()
+        for publisher in self._ends.values():
             publisher.undeclare()
         self._watchers, self._ends = {}, {}
         self._often.close()
@@ -125,12 +128,12 @@ class PartPublisher:
         self._floor[space] = max(self._floor[space], *(last.pop(k) for k in old))
 
     def _watched(self, space: str) -> bool:
-        """Return whether any subscriber selects parts of a space (Zenoh's matching status)."""
-        publisher = self._watchers.get(space)
-        if publisher is None:
+        """Return whether any subscriber selects parts of a space."""
+        watched = self._watchers.get(space)
+        if watched is None:
             key = keys.part_key(space, "*", "*/**", self.root)
-            publisher = self._watchers[space] = self.session.declare_publisher(key)
-        return publisher.matching_status.matching
+            watched = self._watchers[space] = Watched(self.session, key)
+        return watched.matching
 
 
 class _Often:
@@ -139,9 +142,12 @@ class _Often:
     A put on a declared publisher costs half a put on the session (~1 us less), but
     declaring one costs ~80: a key that comes back (a robot's, the reasoner's answer's)
     earns one, a bulk write's keys (seen once) do not. A key of several predicates
-    gets one at once: Zenoh matches it against every subscriber's expression chunk by
-    chunk, ~3 us a chunk with 20 of them, for a put on the session as for a declaration,
-    and a put on a declared publisher pays that once (`docs/performance.md`).
+    gets one at its second put: Zenoh matches it against every subscriber's expression
+    chunk by chunk, ~3 us a chunk with 20 of them, for a put on the session as for a
+    declaration, and a put on a declared publisher pays that once (`docs/performance.md`).
+    Not at its first: a key seen once (a firing record's, a new subject each time) then
+    cost a declaration sent to every client of the store's router, and later its
+    undeclaration, for one put (6.3 % of the store's CPU in `bench/end_to_end.py`).
     """
 
     def __init__(self, session: zenoh.Session) -> None:
@@ -151,10 +157,10 @@ class _Often:
     def put(self, key: str, payload: bytes, *, often: bool = False) -> None:
         """Put a part on its key (BLOCK, as every part: none is dropped when a link is slow).
 
-        `often`: declare its publisher now (a key of several predicates).
+        `often`: declare its publisher at its second put (a key of several predicates).
         """
         seen = self._keys.pop(key, 0)  # put back last: the least recently put are forgotten
-        if isinstance(seen, int) and seen + 1 < OFTEN and not often:
+        if isinstance(seen, int) and seen + 1 < (2 if often else OFTEN):
             self._keys[key] = seen + 1
             self.session.put(key, payload, congestion_control=zenoh.CongestionControl.BLOCK)
         else:

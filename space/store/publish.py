@@ -13,6 +13,7 @@ from space import keys
 from space.changeset import pack
 from space.store.parts import PartPublisher
 from space.store.state import Net, SpaceState
+from space.store.watched import Watched
 from space.terms import triple_from_nt
 
 log = logging.getLogger("tspace.store")
@@ -37,7 +38,7 @@ class Publisher:
     def __init__(self, session: zenoh.Session, root: str) -> None:
         self.session = session
         self.root = root
-        self._graph_publishers: dict[tuple[str, str], zenoh.Publisher] = {}
+        self._graphs: dict[tuple[str, str], Watched] = {}
         # (space, service) -> its publisher
         self._streams: dict[tuple[str, str], zenoh.Publisher | ext.AdvancedPublisher] = {}
         self._lock = threading.Lock()
@@ -47,9 +48,11 @@ class Publisher:
         """Undeclare every publisher declared."""
         with self._lock:
             streams, self._streams = list(self._streams.values()), {}
-        for publisher in [*self._graph_publishers.values(), *streams]:
+        for watched in self._graphs.values():
+            watched.close()
+        for publisher in streams:
             publisher.undeclare()
-        self._graph_publishers = {}
+        self._graphs = {}
         self._parts.close()
 
     def publish(self, committed: list[tuple[SpaceState, Net]]) -> None:
@@ -122,9 +125,9 @@ class Publisher:
                         s.delete(key, attachment=meta, congestion_control=block)
 
     def _watched(self, space: str, graph: str) -> bool:
-        """Return whether any subscriber matches a graph's triple keys (Zenoh's matching status)."""
-        publisher = self._graph_publishers.get((space, graph))
-        if publisher is None:
+        """Return whether any subscriber matches a graph's triple keys."""
+        watched = self._graphs.get((space, graph))
+        if watched is None:
             key = f"{self.root}/{space}/{graph}/**"
-            publisher = self._graph_publishers[(space, graph)] = self.session.declare_publisher(key)
-        return publisher.matching_status.matching
+            watched = self._graphs[(space, graph)] = Watched(self.session, key)
+        return watched.matching
