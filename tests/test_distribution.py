@@ -108,3 +108,30 @@ def test_plain_zenoh_program_watches_a_change_written_by_the_library(ts, server,
         watcher.stdin.close()
         assert watcher.wait(timeout=10) == 0
     assert out.lines[-1] == "space not imported"
+
+
+def test_triples_reach_a_plain_subscriber_each_time_one_comes_back(ts, space_name):
+    """The store publishes triple keys while someone subscribes, told so by Zenoh as
+    subscribers come and go: a subscriber that comes back after none was there hears
+    the next writes again."""
+    for round_ in range(3):
+        ts.write([(AC.probe, AC.round, Literal(f"nobody-{round_}"))])  # nobody listens yet
+        _heard_while_subscribed(ts, space_name, str(round_))
+
+
+def _heard_while_subscribed(ts, space_name: str, tag: str) -> None:
+    """Subscribe to the triple keys, write until a write tagged `tag` is heard, leave."""
+    heard: list[str] = []
+    sub = ts.session.declare_subscriber(
+        f"tspace/{space_name}/t/**", lambda sample: heard.append(str(sample.key_expr))
+    )
+    written = iter(range(1_000_000))
+
+    def written_and_heard() -> bool:
+        ts.write([(AC.probe, AC.round, Literal(f"{tag}-{next(written)}"))])
+        return any(f'"{tag}-' in key for key in heard)
+
+    try:
+        wait_for(written_and_heard, 10, f"a triple heard in round {tag}")
+    finally:
+        sub.undeclare()
