@@ -24,6 +24,7 @@ from pathlib import Path
 import pyoxigraph as ox
 
 from space.errors import SpaceError
+from space.store.background import lower_background_threads
 from space.store.db_layout import (
     DROPPED,
     FUNCTIONAL,
@@ -115,6 +116,7 @@ class StoreDB:
         self.values = Values()  # functional pairs' objects, triples of the latest commits
         self.requests = RequestIds(self._logged_requests)  # which request ids the logs hold
         self._flusher = Flusher(lambda: self.store if hasattr(self, "store") else None)
+        lower_background_threads()
 
     def close(self) -> None:
         """Flush and let go of the database (the last reference closes it)."""

@@ -14,7 +14,8 @@ replacing 200 values committed 0.6-0.7x as long flushed every 10,000 as every
 50,000 (docs/performance.md, "A subject's predicates in one part"). So it also
 flushes after `SMALL` triples when the last flush is `PAUSE` old: at most once
 a second, so a bulk load (40,000 triples a second) flushes about as often as
-before, where flushing every 10,000 cost it 15 % more CPU.
+before, where flushing every 10,000 cost it 15 % more CPU. RocksDB's threads doing
+the flush run at a lower priority than the writer (`space.store.background`).
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import pyoxigraph as ox
+
+from space.store.background import lower_background_threads
 
 log = logging.getLogger("tspace.store")
 
@@ -88,3 +91,4 @@ class Flusher:
                     store.flush()
                 except OSError as exc:  # the next commit says it too, and fails the store
                     log.error("could not flush the database: %s", exc)
+                lower_background_threads()  # any RocksDB started for this flush too

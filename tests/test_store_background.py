@@ -1,0 +1,49 @@
+"""The store's RocksDB background threads yield the cores to its writer (`space.store.background`).
+
+Against a real `tspace serve` process: its flushes and compactions run at a lower
+CPU priority than the threads that answer writes, before and after a flush.
+"""
+
+import os
+from pathlib import Path
+
+import pytest
+from rdflib import Literal, Namespace
+
+from conftest import AC_NS, Server, wait_for
+from space import TripleSpace
+from space.store.background import NICE
+from space.store.flusher import SMALL
+
+AC = Namespace(AC_NS)
+
+pytestmark = pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="Linux only")
+
+
+def _threads(pid: int) -> dict[str, set[int]]:
+    """Return the nice values of a process's threads, by thread name."""
+    nice: dict[str, set[int]] = {}
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        try:
+            name = (task / "comm").read_text().strip()
+            nice.setdefault(name, set()).add(os.getpriority(os.PRIO_PROCESS, int(task.name)))
+        except (OSError, ValueError):
+            continue  # ended meanwhile
+    return nice
+
+
+def test_rocksdb_threads_run_below_the_stores_own_after_a_start_and_a_flush(tmp_path):
+    srv = Server(tmp_path / "data")
+    srv.start()
+    try:
+        assert srv.proc is not None
+        pid = srv.proc.pid
+        with TripleSpace.open(srv.endpoint, space="bg", agent="test") as ts:
+            ts.write([(AC[f"s{i}"], AC.v, Literal(i)) for i in range(SMALL + 10)])  # a flush
+            threads = wait_for(lambda: _threads(pid), what="the store's threads")
+        rocksdb = {name: nice for name, nice in threads.items() if name.startswith("rocksdb:")}
+        assert rocksdb, f"no RocksDB thread in {sorted(threads)}"
+        assert all(nice == {NICE} for nice in rocksdb.values()), rocksdb
+        assert threads["python"] == {0}  # the writer, the main thread: not lowered
+    finally:
+        srv.stop()
