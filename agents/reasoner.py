@@ -45,6 +45,7 @@ from space import (
     Template,
     Triple,
     WhyService,
+    freeze_startup,
     refreeze,
     replace_functional,
     triple_to_nt,
@@ -148,6 +149,11 @@ class Reasoner(Agent):
         # In a canonical order: engines that load the same state fire the same way.
         state = sorted(without_records(asserted), key=triple_to_nt)
         delta, loop = _applying(lambda: engine.load(state))
+        if self.engine is None:
+            # Frozen before its first answer, not after (`run_agent` freezes after setup): that
+            # full collection (50-80 ms with a fleet of 200 robots) then held up the first
+            # changes, which the writers send as soon as the load is answered.
+            freeze_startup()
         self.engine, self._loaded_seq = engine, seq
         self._explainer = None
         self.writers.loaded(seq)
