@@ -1,7 +1,7 @@
 """Run RocksDB's flushes and compactions at a lower CPU priority than the store's writer.
 
-A flush of the memory tables takes 150-400 ms of a core on RocksDB's own
-threads (`rocksdb:high` flushes, `rocksdb:low` compacts). At 2,000 changesets/s
+A flush of the memory tables runs 130-450 ms on RocksDB's own threads
+(`rocksdb:high` flushes, `rocksdb:low` compacts). At 2,000 changesets/s
 on 2 cores the store, the reasoner and the fleet already use ~1.7 of them: each
 flush, every 1.5 s, squeezed the writer and the reasoner onto what was left,
 and answers queued behind it for 40-90 ms (`bench/fleet.py`'s plot: a spike
