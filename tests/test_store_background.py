@@ -20,16 +20,17 @@ AC = Namespace(AC_NS)
 pytestmark = pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="Linux only")
 
 
-def _threads(pid: int) -> dict[str, set[int]]:
-    """Return the nice values of a process's threads, by thread name."""
-    nice: dict[str, set[int]] = {}
+def _threads(pid: int) -> dict[int, tuple[str, int]]:
+    """Return each thread of a process: its id -> its name and nice value."""
+    threads = {}
     for task in Path(f"/proc/{pid}/task").iterdir():
         try:
+            tid = int(task.name)
             name = (task / "comm").read_text().strip()
-            nice.setdefault(name, set()).add(os.getpriority(os.PRIO_PROCESS, int(task.name)))
+            threads[tid] = (name, os.getpriority(os.PRIO_PROCESS, tid))
         except (OSError, ValueError):
             continue  # ended meanwhile
-    return nice
+    return threads
 
 
 def test_rocksdb_threads_run_below_the_stores_own_after_a_start_and_a_flush(tmp_path):
@@ -41,9 +42,10 @@ def test_rocksdb_threads_run_below_the_stores_own_after_a_start_and_a_flush(tmp_
         with TripleSpace.open(srv.endpoint, space="bg", agent="test") as ts:
             ts.write([(AC[f"s{i}"], AC.v, Literal(i)) for i in range(SMALL + 10)])  # a flush
             threads = wait_for(lambda: _threads(pid), what="the store's threads")
-        rocksdb = {name: nice for name, nice in threads.items() if name.startswith("rocksdb:")}
-        assert rocksdb, f"no RocksDB thread in {sorted(threads)}"
-        assert all(nice == {NICE} for nice in rocksdb.values()), rocksdb
-        assert threads["python"] == {0}  # the writer, the main thread: not lowered
+        rocksdb = [nice for name, nice in threads.values() if name.startswith("rocksdb:")]
+        assert rocksdb, f"no RocksDB thread in {sorted(threads.values())}"
+        assert set(rocksdb) == {NICE}, threads
+        others = {name: nice for name, nice in threads.values() if not name.startswith("rocksdb:")}
+        assert threads[pid][1] == 0 and set(others.values()) == {0}, others  # writer, Zenoh
     finally:
         srv.stop()
