@@ -341,16 +341,9 @@ class Agent:
             if not failed.added and not failed.removed:  # a renewal (`_renew`): nothing to undo
                 self.log.warning("renewal %s not taken: %s", failed.id, failed.error)
                 continue
-            if isinstance(failed.error, SpaceUnavailable | SpaceTimeout):  # outcome unknown
-                self.log.warning(
-                    "write %s unanswered, maybe applied, undone in the view: %s",
-                    failed.id,
-                    failed.error,
-                )
-            else:
-                self.log.warning(
-                    "write %s not taken, undone in the view: %s", failed.id, failed.error
-                )
+            unknown = isinstance(failed.error, SpaceUnavailable | SpaceTimeout)  # no answer came
+            what = "unanswered, maybe applied" if unknown else "not taken"
+            self.log.warning("write %s %s, undone in the view: %s", failed.id, what, failed.error)
             if all(t in self.view for t in failed.added):
                 self.view.remove(failed.added)
                 self.view.add(failed.removed)
