@@ -19,6 +19,7 @@ from rdflib.term import Node
 from space.errors import MalformedPayload
 
 Triple = tuple[Node, Node, Node]
+TextTriple = tuple[str, str, str]  # a triple's N-Triples texts, as on the wire
 
 _ESCAPES = {"\\": "\\\\", '"': '\\"', "\n": "\\n", "\r": "\\r", "\t": "\\t"}
 _ESCAPE_RE = re.compile(r'[\\"\n\r\t]')
@@ -118,3 +119,25 @@ def _triple(s_text: str, p_text: str, o_text: str) -> Triple:
 def triple_to_nt(triple: Triple) -> list[str]:
     """Return the `[s, p, o]` N-Triples texts of a triple."""
     return [to_nt(triple[0]), to_nt(triple[1]), to_nt(triple[2])]
+
+
+def text_triple(parts: object) -> TextTriple:
+    """Return a `[s, p, o]` list of N-Triples texts as a tuple, checking its shape only.
+
+    For a reader that keeps terms in their wire form: each text is parsed (and
+    so checked whole) where it is first met, by that reader (`from_nt`).
+
+    Raises:
+        MalformedPayload: not three non-empty strings; a literal as subject; a
+            predicate that is not an IRI.
+    """
+    if (
+        not isinstance(parts, list | tuple)
+        or len(parts) != 3
+        or not all(isinstance(x, str) and x for x in parts)
+    ):
+        raise MalformedPayload(f"a triple is a list of three N-Triples terms, got {parts!r}")
+    s, p, o = parts
+    if s[0] not in "<_" or p[0] != "<" or o[0] not in '<_"':
+        raise MalformedPayload(f"not a valid RDF triple: {list(parts)!r}")
+    return (s, p, o)

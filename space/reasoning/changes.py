@@ -103,14 +103,16 @@ class ChangeLog:
         removed = [t for t, (was, _) in before.items() if was and t not in triples]
         return added, removed
 
-    def delta(self, firings: tuple[Firing, ...]) -> Delta:
+    def delta(self, firings: tuple[Firing, ...], *, texts: bool = False) -> Delta:
         """Return the net change since `begin`: each touched triple's plan (`_PLANS`) by its
-        states before and now, and what the caller meant for it."""
+        states before and now, and what the caller meant for it; with `texts`, its triples
+        as N-Triples texts."""
         out: tuple[list, ...] = ([], [], [], [], [], [])
         triples, asserted, expected = self._triples, self._asserted, self._expected.get
         functors, hidden, shown = self._terms.functors, self._terms.hidden, self._terms.shown
         filtered = bool(functors or hidden)
-        names, plans = self._terms.names, _PLANS  # decoded here, not by a call per triple
+        names = self._terms.texts() if texts else self._terms.names  # not a call per triple
+        plans = _PLANS
         for t, was in self._before.items():
             plan = plans[was, t in triples, t in asserted, expected(t)]
             if plan is None:

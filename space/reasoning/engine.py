@@ -169,8 +169,25 @@ class RuleEngine(EngineReads, EngineFirings):
         """
         return self._apply_ids([self._encode(t) for t in added], [self._encode(t) for t in removed])
 
-    def _apply_ids(self, plus: list[T], minus: list[T]) -> Delta:
-        """`apply` on encoded triples (a HybridEngine passes its forward layer's changes)."""
+    def apply_texts(
+        self, added: Iterable[Sequence[str]] = (), removed: Iterable[Sequence[str]] = ()
+    ) -> Delta:
+        """`apply` on triples given as N-Triples texts; the `Delta`'s triples are texts too.
+
+        For a caller that keeps terms in their wire form (the reasoner agent): a term is
+        parsed once, when the engine first meets it, and no rdflib term is made for the
+        rest. Every triple is encoded before the state changes.
+
+        Raises:
+            MalformedPayload: a text is not an N-Triples term (the state is unchanged).
+            RuleLoopError: as `apply`; its `kept` in texts.
+        """
+        encode = self.terms.encode_texts
+        return self._apply_ids(encode(added), encode(removed), texts=True)
+
+    def _apply_ids(self, plus: list[T], minus: list[T], *, texts: bool = False) -> Delta:
+        """`apply` on encoded triples (a HybridEngine passes its forward layer's changes);
+        with `texts`, the `Delta`'s triples are N-Triples texts."""
         if not self._loaded:
             plus = self._ontology + plus
         self._log.begin(plus, minus)
@@ -186,15 +203,15 @@ class RuleEngine(EngineReads, EngineFirings):
                 self._withdraw()
         except RuleLoopError as loop:
             self._undo()
-            loop.kept = self._apply_monotonic(plus, minus)
+            loop.kept = self._apply_monotonic(plus, minus, texts)
             raise
         except Exception:
             self._undo()
             raise
         self._loaded = True
-        return self._log.delta(tuple(self._firings))
+        return self._log.delta(tuple(self._firings), texts=texts)
 
-    def _apply_monotonic(self, plus: list[T], minus: list[T]) -> Delta:
+    def _apply_monotonic(self, plus: list[T], minus: list[T], texts: bool) -> Delta:
         """Apply a change with production rules off: after a loop, the caller's triples stay."""
         self._log.begin(plus, minus)
         self._firings.clear()
@@ -207,7 +224,7 @@ class RuleEngine(EngineReads, EngineFirings):
             self._agenda.reset()
         self._loaded = True
         self._graph = None
-        return self._log.delta(())
+        return self._log.delta((), texts=texts)
 
     def _encode(self, triple: Triple) -> T:
         if not isinstance(triple, tuple | list) or len(triple) != 3:

@@ -35,7 +35,7 @@ from space.reasoning.rdffiles import read_graph
 from space.reasoning.rules import Rule
 from space.reasoning.terms import TermTable
 from space.reasoning.triples import T
-from space.terms import Triple
+from space.terms import TextTriple, Triple
 
 
 def mixes_forms(rules: Sequence[Rule]) -> bool:
@@ -130,6 +130,18 @@ class HybridEngine:
         """
         return self._both(lambda: self.forward.apply(added, removed))
 
+    def apply_texts(
+        self, added: Iterable[Sequence[str]] = (), removed: Iterable[Sequence[str]] = ()
+    ) -> Delta:
+        """`apply` on N-Triples texts, the `Delta` in texts (see `RuleEngine.apply_texts`)."""
+        return self._both(lambda: self.forward.apply_texts(added, removed), texts=True)
+
+    def match_texts(
+        self, subject: str | None = None, predicate: str | None = None, obj: str | None = None
+    ) -> Iterator[TextTriple]:
+        """`match` with the pattern and the triples as N-Triples texts."""
+        return self.backward.match_texts(subject, predicate, obj)
+
     def why(self, triple: Triple) -> Why | None:
         """Return why a triple holds, from the layer that concluded it."""
         found = self.backward.why(triple)
@@ -137,8 +149,9 @@ class HybridEngine:
             return self.forward.why(triple)
         return found
 
-    def _both(self, first_layer: Callable[[], Delta]) -> Delta:
-        """Run the forward layer, pass its net change to the backward layer, merge the two."""
+    def _both(self, first_layer: Callable[[], Delta], *, texts: bool = False) -> Delta:
+        """Run the forward layer, pass its net change to the backward layer, merge the two
+        (with `texts`, the triples as N-Triples texts)."""
         loop: RuleLoopError | None = None
         try:
             first = first_layer()
@@ -149,18 +162,19 @@ class HybridEngine:
             second = self.backward._apply_ids(plus, minus)
         except RuleLoopError as exc:
             loop, second = loop or exc, exc.kept  # type: ignore[assignment]
-        delta = self._merge(first, second)
+        delta = self._merge(first, second, self.terms.text_triple if texts else self.terms.triple)
         if loop is not None:
             loop.kept = delta
             raise loop
         return delta
 
-    def _merge(self, first: Delta, second: Delta) -> Delta:
+    def _merge(self, first: Delta, second: Delta, decode: Callable[[T], Triple]) -> Delta:
         """Return the net change of the whole state: present in the backward layer's state,
-        asserted when asserted in the forward layer (as `ChangeLog.delta` for one engine)."""
+        asserted when asserted in the forward layer (as `ChangeLog.delta` for one engine);
+        its triples as `decode` gives them."""
         forward_before, backward_before = self.forward._log.before, self.backward._log.before
         asserted, present = self.forward._asserted, self.backward._store.triples
-        shown, decode = self.terms.shown, self.terms.triple
+        shown = self.terms.shown
         added: list[TripleChange] = []
         removed: list[TripleChange] = []
         inferred: tuple[list[Triple], list[Triple]] = ([], [])

@@ -18,7 +18,7 @@ from space.reasoning.support import Support
 from space.reasoning.terms import TermTable
 from space.reasoning.triples import T, TripleStore
 from space.reasoning.view import live_graph
-from space.terms import Triple
+from space.terms import TextTriple, Triple
 
 
 class EngineReads:
@@ -71,12 +71,25 @@ class EngineReads:
         Costs what matches, through the indexes: unlike `graph`, nothing is
         rebuilt after an update, so a caller may look things up on every change.
         """
-        pattern = (subject, predicate, obj)
-        ids = [None if x is None else self.terms.find(x) for x in pattern]
+        find = self.terms.find
+        ids = [None if x is None else find(x) for x in (subject, predicate, obj)]
+        return self._matching(ids, (subject, predicate, obj), self.terms.names)
+
+    def match_texts(
+        self, subject: str | None = None, predicate: str | None = None, obj: str | None = None
+    ) -> Iterator[TextTriple]:
+        """`match` with the pattern and the triples as N-Triples texts."""
+        find = self.terms.find_text
+        ids = [None if x is None else find(x) for x in (subject, predicate, obj)]
+        return self._matching(ids, (subject, predicate, obj), self.terms.texts())
+
+    def _matching(
+        self, ids: list[int | None], pattern: tuple[object, ...], names: list
+    ) -> Iterator[tuple]:
+        """Yield the stored triples matching encoded `ids`, decoded by `names`."""
         if any(i is None and x is not None for i, x in zip(ids, pattern, strict=True)):
             return  # a term the engine never saw: nothing matches
         functors, hidden = self.terms.functors, self.terms.hidden  # as TermTable.shown, inlined
-        names = self.terms.names  # decoded here, not by two calls per triple
         for s, p, o in self._store.match(*ids):
             if o in functors or s in functors:
                 continue

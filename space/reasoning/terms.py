@@ -4,16 +4,24 @@ Each term also gets a value key, computed once, that makes `1`, `1.0` and
 `"1"^^xsd:int` equal for the builtins that compare by value. A literal typed
 xsd:string is the simple literal of the same text (RDF 1.1, and `space.terms` on
 the wire), so both get one id: they match, compare and `noValue` alike.
+
+A term also has its N-Triples text (`text_id`, `texts`): a caller that keeps
+terms in their wire form (the reasoner agent) goes from text to id and back
+with a dict and a list, parsing a term once, when it is first seen.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from datetime import date, datetime, time
 from decimal import Decimal
 
 from rdflib import XSD, Literal
 from rdflib.term import Node
+
+from space.errors import MalformedPayload
+from space.terms import TextTriple, from_nt, to_nt
 
 
 @dataclass(frozen=True)
@@ -26,6 +34,7 @@ class FunctorValue:
 
 Value = Node | FunctorValue
 _XSD_STRING = XSD.string  # looked up once: the namespace's attribute access is Python code
+_NT = to_nt.__wrapped__  # each term once: not through (and not evicting) the shared cache
 
 
 def simple(term: Value) -> Value:
@@ -59,6 +68,8 @@ class TermTable:
         self.keys: list[object] = []
         self.functors: set[int] = set()
         self.hidden: set[int] = set()  # nodes `hide` keeps out of listings (as Jena's FB graph)
+        self._by_text: dict[str, int] = {}
+        self._texts: list[str] = []  # by id, filled up to the newest id by `texts()`
 
     def __len__(self) -> int:
         return len(self._terms)
@@ -79,6 +90,57 @@ class TermTable:
         if isinstance(term, FunctorValue):
             self.functors.add(new)
         return new
+
+    def text_id(self, text: str) -> int:
+        """Return the id of a term given as N-Triples text, parsing it only when new here.
+
+        Raises:
+            MalformedPayload: the text is not an N-Triples term.
+        """
+        found = self._by_text.get(text)
+        if found is None:
+            found = self._by_text[text] = self.id(from_nt(text))
+        return found
+
+    def encode_texts(self, triples: Iterable[Sequence[str]]) -> list[tuple[int, int, int]]:
+        """Return the ids of triples given as N-Triples texts, all of them or none.
+
+        Raises:
+            MalformedPayload: a text is not an N-Triples term, a subject is a literal or
+                a predicate not an IRI (terms met before the bad one keep their ids).
+        """
+        id_of, out = self.text_id, []
+        try:
+            for s, p, o in triples:
+                if s[0] == '"' or p[0] != "<":
+                    raise MalformedPayload(f"not a valid RDF triple: {[s, p, o]!r}")
+                out.append((id_of(s), id_of(p), id_of(o)))
+        except (TypeError, ValueError, IndexError):  # not three texts
+            raise MalformedPayload(f"not a triple of N-Triples texts in {triples!r}") from None
+        return out
+
+    def find_text(self, text: str) -> int | None:
+        """Return the id of a term given as N-Triples text, or None if it was never seen."""
+        found = self._by_text.get(text)
+        if found is None:
+            try:
+                found = self.find(from_nt(text))
+            except MalformedPayload:  # not a term, so never seen
+                return None
+        return found
+
+    def texts(self) -> list[str]:
+        """Return the N-Triples texts by id (read only; a functor's is empty: never listed)."""
+        texts, terms = self._texts, self._terms
+        for i in range(len(texts), len(terms)):
+            term = terms[i]
+            texts.append("" if isinstance(term, FunctorValue) else _NT(term))
+        return texts
+
+    def text_triple(self, t: tuple[int, int, int]) -> TextTriple:
+        """Return the N-Triples texts of an encoded triple."""
+        texts = self.texts()
+        return (texts[t[0]], texts[t[1]], texts[t[2]])
 
     def find(self, term: Value) -> int | None:
         """Return the id of a term, or None if it was never seen."""
