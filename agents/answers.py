@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from rdflib.term import Node
 
-from space import Triple
+from space import TextTriple, triple_to_nt
 from space.reasoning import Delta, Engine, Origin
 
 OWED_FOR = 60.0  # seconds: an owner alive this long after a change answers it itself or resyncs
@@ -78,11 +78,14 @@ class Ledger:
 
 
 def present_truth(engine: Engine, deltas: Iterable[Delta]) -> Delta:
-    """Return what the engine holds now of the triples these deltas changed, as one delta."""
-    asserted = set(engine.triples(Origin.ASSERTED))
-    inferred = set(engine.triples(Origin.INFERRED))
-    touched_a: dict[Triple, None] = {}
-    touched_i: dict[Triple, None] = {}
+    """Return what the engine holds now of the triples these deltas changed, as one delta.
+
+    The deltas' triples are N-Triples texts (`Engine.apply_texts`), and so are its.
+    """
+    asserted = {tuple(triple_to_nt(t)) for t in engine.triples(Origin.ASSERTED)}
+    inferred = {tuple(triple_to_nt(t)) for t in engine.triples(Origin.INFERRED)}
+    touched_a: dict[TextTriple, None] = {}
+    touched_i: dict[TextTriple, None] = {}
     firings = []
     for delta in deltas:
         touched_a.update(dict.fromkeys((*delta.asserted_added, *delta.asserted_removed)))

@@ -16,12 +16,16 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Iterable
 from datetime import UTC, datetime
+from typing import TypeVar
 
 from rdflib import Graph, Literal, URIRef
 from rdflib.term import Node
 
 from agents.vocabulary import AC, RDF_TYPE, RECORD_PREFIX
-from space import Triple
+from space import TextTriple, Triple, to_nt
+
+AnyTriple = Triple | TextTriple
+T = TypeVar("T", Triple, TextTriple)
 
 FIRING_PREFIX = RECORD_PREFIX  # the subjects of firing records
 RULE_NAMES = AC.rule_names
@@ -33,21 +37,25 @@ def rule_names(triples: Iterable[Triple]) -> list[str]:
 
 
 RECORD_TYPES = frozenset({AC.RuleFiring, AC.RuleLoop})
+_IN_TEXTS = (frozenset(map(to_nt, RECORD_TYPES)), to_nt(RDF_TYPE))  # as the wire has them
 
 
-def record_subjects(triples: Iterable[Triple]) -> set[Node]:
-    """Return the firing records among the subjects of `triples`: those typed as one.
+def record_subjects(triples: Iterable[AnyTriple], *, texts: bool = False) -> set:
+    """Return the firing records among the subjects of `triples`: those typed as one
+    (with `texts`, triples and subjects as N-Triples texts).
 
     A record is written and dropped whole, its type with it, so the triples of one
     changeset (or a whole state) name their records themselves.
     """
-    return {s for s, p, o in triples if o in RECORD_TYPES and p == RDF_TYPE}  # the set first: fast
+    kinds, typed = _IN_TEXTS if texts else (RECORD_TYPES, RDF_TYPE)
+    return {s for s, p, o in triples if o in kinds and p == typed}  # the set first: fast
 
 
-def without_records(triples: Iterable[Triple]) -> list[Triple]:
-    """Return the triples but those of firing records (the rules never need to see those)."""
+def without_records(triples: Iterable[T], *, texts: bool = False) -> list[T]:
+    """Return the triples but those of firing records (the rules never need to see those);
+    `texts` as for `record_subjects`."""
     triples = list(triples)
-    records = record_subjects(triples)
+    records = record_subjects(triples, texts=texts)
     return [t for t in triples if t[0] not in records] if records else triples
 
 

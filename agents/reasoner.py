@@ -5,7 +5,9 @@ form, backward and nested rules in a second layer as Jena's hybrid mode), applie
 every changeset other agents write, and writes back one changeset naming its
 cause: what production rules changed (asserted) and what is entailed
 (inferred graph), plus a record of each rule firing (`agents.firings`). Its
-own changesets are ignored. A changed rules file is reloaded without a
+own changesets are ignored. Changes come in, and answers go out, as the wire has their
+terms (N-Triples texts, `Engine.apply_texts`): a term is parsed once, when the engine
+first meets it. A changed rules file is reloaded without a
 restart; a broken one is logged with its line and column and the rules in
 force stay. On start it writes the ontology (and `--robot-file`) into the
 space when the space does not have them yet (`agents.knowledge`). It answers `why` on the space's
@@ -21,7 +23,8 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from dataclasses import replace
 
 import zenoh
 from rdflib import OWL
@@ -43,11 +46,14 @@ from space import (
     Explanation,
     Subscription,
     Template,
+    TextTriple,
     Triple,
     WhyService,
     freeze_startup,
     refreeze,
     replace_functional,
+    to_nt,
+    triple_from_nt,
     triple_to_nt,
 )
 from space.reasoning import (
@@ -59,8 +65,8 @@ from space.reasoning import (
     RuleLoopError,
 )
 
-# Looked up once: an rdflib namespace's attribute costs ~1 us, once a triple added.
-_FUNCTIONAL = OWL.FunctionalProperty
+# The texts of the terms `_replaced` asks about, as changes carry them.
+_TYPE, _FUNCTIONAL = to_nt(RDF_TYPE), to_nt(OWL.FunctionalProperty)
 
 
 class Reasoner(Agent):
@@ -113,7 +119,7 @@ class Reasoner(Agent):
         engine = self.knowledge.build()
         # Its own answers are left out before parsing: it ignores them.
         subscription = self.ts.subscribe(
-            None, self._receive, timeout=self.args.timeout, skip_own=True
+            None, self._receive, timeout=self.args.timeout, skip_own=True, texts=True
         )
         try:
             args = self.args
@@ -162,7 +168,7 @@ class Reasoner(Agent):
         if loop is not None:
             self.log.error("loading the space: %s; those firings undone", loop)
         if write:
-            self._write(delta, None, inferred_before=set(inferred), loop=loop)
+            self._write(in_texts(delta), None, inferred_before=set(inferred), loop=loop)
 
     def _resync(self) -> None:
         """Rebuild the engine from the space, after an answer the space did not take.
@@ -192,25 +198,31 @@ class Reasoner(Agent):
     # Changes
 
     def on_change(self, change: Change) -> None:
-        """Apply another agent's changeset (another reasoner's records left out), answer it."""
+        """Apply another agent's changeset (another reasoner's records left out), answer it.
+
+        Its triples are N-Triples texts; one the engine cannot parse drops the change
+        before anything is applied (`MalformedPayload`, logged by the caller).
+        """
         if self.engine is None or change.seq <= self._loaded_seq:
             return  # in the state loaded
-        self.writers.note(change)
         from_reasoner = self.roster is not None and change.agent.startswith(PREFIX)
         if from_reasoner:
             self._ledger.answered(change.cause)
-        added, removed = without_records(change.added), without_records(change.removed)
+        added = without_records(change.added, texts=True)
+        removed = without_records(change.removed, texts=True)
         removed += self._replaced(added, removed)
+        engine = self.engine
+        if added or removed:
+            delta, loop = _applying(lambda: engine.apply_texts(added, removed))
+        self.writers.note(change)  # once its terms are known good
         if not added and not removed:
             return
-        engine = self.engine
-        delta, loop = _applying(lambda: engine.apply(added=added, removed=removed))
         if loop is not None:
             self.log.error("change %s: %s; those firings undone, the change kept", change.id, loop)
         if self.roster is not None:
             if from_reasoner:
                 return  # another reasoner's answer: this engine concluded the same
-            robot = concerned_robot(self.engine, [*added, *removed])
+            robot = concerned_robot(self.engine, [triple_from_nt(t) for t in (*added, *removed)])
             if not self.roster.answers(robot, change.seq):
                 # Another reasoner answers, having drawn the same conclusions; until its
                 # answer is seen, this one can stand in for it if it dies.
@@ -218,8 +230,8 @@ class Reasoner(Agent):
                 return
         self._write(delta, change.id, wait=False, loop=loop)
 
-    def _replaced(self, added: list[Triple], removed: list[Triple]) -> list[Triple]:
-        """Return the old values of functional properties that `added` replaces.
+    def _replaced(self, added: list[TextTriple], removed: list[TextTriple]) -> list[TextTriple]:
+        """Return the old values of functional properties that `added` replaces (texts).
 
         The store replaces them too; doing it here keeps the engine's state the
         store's even when a writer did not say what it replaced.
@@ -227,9 +239,9 @@ class Reasoner(Agent):
         engine = self.engine
         assert engine is not None
         change = replace_functional(
-            added,
-            lambda p: (p, RDF_TYPE, _FUNCTIONAL) in engine,
-            lambda s, p: [t[2] for t in engine.match(s, p)],
+            added,  # type: ignore[arg-type]
+            lambda p: any(engine.match_texts(p, _TYPE, _FUNCTIONAL)),  # type: ignore[arg-type]
+            lambda s, p: [t[2] for t in engine.match_texts(s, p)],  # type: ignore[arg-type]
         )
         return [t for t in change.replaced if t not in removed]
 
@@ -242,11 +254,13 @@ class Reasoner(Agent):
         wait: bool = True,
         loop: RuleLoopError | None = None,
     ) -> None:
-        """Write a delta (and its firing records) to the space as one changeset.
+        """Write a delta in texts (and its firing records) to the space as one changeset.
 
-        Without `wait`, the store's acknowledgement is read later (`agents.in_flight`):
-        changes are answered without a round trip to the store each, in order; the
-        run loop's ticks read the acknowledgements as they come in.
+        `inferred_before`: the inferred triples (rdflib terms) the space held before a
+        load, to write the difference from the engine's. Without `wait`, the store's
+        acknowledgement is read later (`agents.in_flight`): changes are answered without
+        a round trip to the store each, in order; the run loop's ticks read the
+        acknowledgements as they come in.
         """
         assert self.ts is not None and self.engine is not None
         inferred_added, inferred_removed = list(delta.inferred_added), list(delta.inferred_removed)
@@ -254,13 +268,13 @@ class Reasoner(Agent):
         for conflict in conflicts:
             self.log.warning("conflict (cause %s): %s", cause, conflict)
         if inferred_before is None:
-            inferred_added += new_conflicts
-            inferred_removed += gone_conflicts
+            inferred_added += _texts(new_conflicts)
+            inferred_removed += _texts(gone_conflicts)
         else:
             now = set(self.engine.triples(Origin.INFERRED)) | self.conflicts.triples()
             inferred_added, inferred_removed = (
-                list(now - inferred_before),
-                list(inferred_before - now),
+                _texts(now - inferred_before),
+                _texts(inferred_before - now),
             )
         concluded = list(delta.asserted_added), list(delta.asserted_removed)
         added, removed = list(concluded[0]), list(concluded[1])
@@ -271,12 +285,12 @@ class Reasoner(Agent):
             fired.setdefault(robot, []).append(firing.rule)
         for robot, rules in fired.items():
             new, old = self.firings.record(rules, cause, robot)
-            added += new
-            removed += old
+            added += _texts(new)
+            removed += _texts(old)
         if loop is not None:
             new, old = self.firings.loop(loop.rules, cause, self.robot)
-            added += new
-            removed += old
+            added += _texts(new)
+            removed += _texts(old)
         if delta.firings:
             # One line per answer: 200 firings logged one by one took milliseconds.
             rules = dict.fromkeys(firing.rule for firing in delta.firings)
@@ -290,6 +304,7 @@ class Reasoner(Agent):
             inferred_removed=inferred_removed,
             cause=cause,
         )
+        cs.texts = True
         self.writers.note(cs, *concluded)  # not the records: `why` is never asked about them
         if wait:
             self.ts.send(cs, timeout=self.args.timeout)
@@ -347,7 +362,7 @@ class Reasoner(Agent):
         refreeze()  # the old engine is garbage now, out of the frozen generation
         self.log.info("rules reloaded: %d rules", len(engine.rules))
         if self.roster is None or self.roster.answers(None):
-            self._write(delta, None, inferred_before=inferred_before)
+            self._write(in_texts(delta), None, inferred_before=inferred_before)
 
     # Why
 
@@ -365,6 +380,22 @@ class Reasoner(Agent):
     def _history(self, first: int, last: int) -> list[Changeset]:
         assert self.ts is not None
         return self.ts.history(first, last, timeout=self.args.timeout)[0]
+
+
+def _texts(triples: Iterable[Triple]) -> list[TextTriple]:
+    """Return triples of rdflib terms as the N-Triples texts the reasoner's answers carry."""
+    return [tuple(triple_to_nt(t)) for t in triples]  # type: ignore[misc]
+
+
+def in_texts(delta: Delta) -> Delta:
+    """Return a `Delta` of rdflib terms (a load's) with the triples an answer writes in texts."""
+    return replace(
+        delta,
+        asserted_added=tuple(_texts(delta.asserted_added)),
+        asserted_removed=tuple(_texts(delta.asserted_removed)),
+        inferred_added=tuple(_texts(delta.inferred_added)),
+        inferred_removed=tuple(_texts(delta.inferred_removed)),
+    )
 
 
 def _applying(apply: Callable[[], Delta]) -> tuple[Delta, RuleLoopError | None]:

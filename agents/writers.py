@@ -2,7 +2,8 @@
 
 `Writers` remembers, for each asserted triple, the changeset that last added
 it: from the changes the reasoner applies, and for what it loaded at start
-from the store's log, read backwards on demand.
+from the store's log, read backwards on demand. It keeps the triples as the
+reasoner gets them, N-Triples texts.
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Iterable
 
-from space import Changeset, SpaceError, Triple, Written
+from space import Changeset, SpaceError, TextTriple, Triple, Written, triple_to_nt
 
 log = logging.getLogger("tspace.why")
 
@@ -27,7 +28,7 @@ class Writers:
 
     def __init__(self, history: Callable[[int, int], list[Changeset]]) -> None:
         self._history = history
-        self._by: dict[Triple, Written] = {}
+        self._by: dict[TextTriple, Written] = {}
         self._unread = 0  # the log up to this seq holds writers not yet read
 
     def loaded(self, seq: int) -> None:
@@ -37,13 +38,14 @@ class Writers:
     def note(
         self,
         cs: Changeset,
-        added: list[Triple] | None = None,
-        removed: list[Triple] | None = None,
+        added: list[TextTriple] | None = None,
+        removed: list[TextTriple] | None = None,
     ) -> None:
         """Remember who wrote the asserted triples a changeset adds; forget the removed ones.
 
-        `added`, `removed`: those of its triples to note, when not all (the reasoner's
-        answers leave out their firing records, half of an answer that fired 200 rules).
+        The changeset's triples are N-Triples texts (`Changeset.texts`). `added`,
+        `removed`: those of its triples to note, when not all (the reasoner's answers
+        leave out their firing records, half of an answer that fired 200 rules).
         """
         by = self._by
         for t in cs.removed if removed is None else removed:
@@ -60,8 +62,8 @@ class Writers:
         Blocks on the store for those (the first `why` after a start); a store that
         does not answer leaves them unknown, it is logged.
         """
-        wanted = list(triples)
-        missing = {t for t in wanted if t not in self._by}
+        wanted = {t: tuple(triple_to_nt(t)) for t in triples}  # as they are kept
+        missing = {t for t in wanted.values() if t not in self._by}
         scanned = 0
         while missing and self._unread >= 1 and scanned < LOG_SCAN_MAX:
             first = max(1, self._unread - LOG_CHUNK + 1)
@@ -72,9 +74,9 @@ class Writers:
                 break
             for cs in reversed(changes):
                 written = Written(cs.agent, cs.timestamp, cs.id, cs.seq)
-                for t in cs.added:
-                    self._by.setdefault(t, written)  # a later write, noted already, wins
+                for t in cs.added:  # a later write, noted already, wins
+                    self._by.setdefault(tuple(triple_to_nt(t)), written)  # type: ignore[arg-type]
             scanned += self._unread - first + 1
             self._unread = first - 1
             missing = {t for t in missing if t not in self._by}
-        return {t: self._by[t] for t in wanted if t in self._by}
+        return {t: self._by[text] for t, text in wanted.items() if text in self._by}

@@ -45,7 +45,8 @@ class Subscription:
     """One `subscribe()` to whole changesets: a template, a callback, the last seq delivered.
 
     `skip_agent` (a writer's name) leaves out that writer's changesets before
-    their terms are parsed. Close it with `close()` (or `TripleSpace.unsubscribe`).
+    their terms are parsed; with `texts`, the terms are not parsed at all: the
+    changes carry N-Triples texts. Close it with `close()` (or `TripleSpace.unsubscribe`).
     """
 
     waiting = False  # whether a change received waits for more of its parts to be delivered
@@ -57,8 +58,10 @@ class Subscription:
         callback: Callback,
         *,
         skip_agent: str | None = None,
+        texts: bool = False,
     ) -> None:
         self.template = template
+        self.texts = texts
         self.callback = callback
         self.skip_agent = skip_agent
         self.last_seq = 0
@@ -99,7 +102,8 @@ class Subscription:
         assert isinstance(wire, dict)
         if self.skip_agent is not None and wire.get("agent") == self.skip_agent:
             return seq, None
-        return seq, Changeset.from_wire(wire)  # its seq, checked above, is read as it is
+        # Its seq, checked above, is read as it is.
+        return seq, Changeset.from_wire(wire, texts=self.texts)
 
     def merge(self, into: object, item: object) -> bool:
         """Fold `item` into `into`, both waiting for delivery; False when they stay apart."""
@@ -187,6 +191,7 @@ class Subscription:
             inferred_added=lists[2],
             inferred_removed=lists[3],
             bindings=bindings,
+            texts=cs.texts,
         )
 
 

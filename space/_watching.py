@@ -31,6 +31,7 @@ class Watching(Handle):
         timeout: float = 5.0,
         skip_own: bool = False,
         scope: list[Scope] | None = None,
+        texts: bool = False,
     ) -> Subscription:
         """Call `callback(change)` for every later changeset with triples matching `template`.
 
@@ -50,16 +51,24 @@ class Watching(Handle):
         `snapshot="all"`, everything matching `template` (the knowledge a robot's
         agent reads once, whose changes do not concern it).
 
+        `texts=True` (whole changesets only: no template, scope or snapshot) leaves
+        the terms unparsed: each change's triples are their N-Triples texts `(s, p, o)`,
+        checked for shape (`space.terms.text_triple`), for a reader that keeps terms
+        in their wire form and parses one only when it first meets it (the reasoner's
+        engine, `apply_texts`).
+
         Raises:
             SpaceUnavailable: no store answered (the sequence number is needed to fill gaps).
-            InputError: a malformed scope.
+            InputError: a malformed scope; `texts` with a template, a scope or a snapshot.
         """
         t = self._template(template)
+        if texts and (scope is not None or snapshot or (t.s, t.p, t.o) != (None, None, None)):
+            raise InputError("texts=True is for whole changesets: no template, scope or snapshot")
         if not self._watchdogs:
             self._watch_store()
         skip_agent = self.agent if skip_own else None
         if scope is None:
-            sub = Subscription(self._dispatcher, t, callback, skip_agent=skip_agent)
+            sub = Subscription(self._dispatcher, t, callback, skip_agent=skip_agent, texts=texts)
             sub_keys: list[str] = []  # whole changesets: an advanced subscriber, below
         else:
             sub = ScopedSubscription(

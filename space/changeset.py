@@ -10,7 +10,7 @@ from datetime import UTC, datetime
 import msgpack
 
 from space.errors import MalformedPayload
-from space.terms import Triple, triple_from_nt, triple_to_nt
+from space.terms import Triple, text_triple, triple_from_nt, triple_to_nt
 
 WIRE_VERSION = 1
 LISTS = ("add", "del", "iadd", "idel")  # the wire names of the four triple lists
@@ -36,6 +36,7 @@ class Changeset:
     prefixes: dict[str, str] = field(default_factory=dict)
     seq: int = 0
     lifespan: float | None = None  # seconds the added triples live unless written again
+    texts: bool = False  # the triples are N-Triples texts `(s, p, o)`, as on the wire
 
     def is_empty(self) -> bool:
         """Return True when the changeset changes nothing."""
@@ -62,7 +63,11 @@ class Changeset:
         if self.prefixes:
             wire["prefixes"] = self.prefixes
         if texts is None:
-            texts = [[triple_to_nt(t) for t in triples] for triples in self._lists()]
+            texts = (
+                self._lists()
+                if self.texts
+                else [[triple_to_nt(t) for t in triples] for triples in self._lists()]
+            )
         for name, listed in zip(LISTS, texts, strict=True):
             if listed:
                 wire[name] = listed
@@ -76,19 +81,22 @@ class Changeset:
         return msgpack.packb(self.to_wire(texts), use_bin_type=True)
 
     @classmethod
-    def from_wire(cls, wire: object, *, published: bool = False) -> Changeset:
+    def from_wire(cls, wire: object, *, published: bool = False, texts: bool = False) -> Changeset:
         """Build a changeset from its decoded map.
 
         A writer's changeset must carry its `id`; one the store published or
-        logged (`published=True`) also its `seq` (see `published_seq`).
+        logged (`published=True`) also its `seq` (see `published_seq`). With
+        `texts`, its triples stay N-Triples texts, checked for shape only
+        (`space.terms.text_triple`): the reader parses each term where it meets it.
 
         Raises:
             MalformedPayload: a field is missing, of the wrong type, or a term is invalid.
         """
         seq = published_seq(wire) if published else None
         wire = _checked(wire)
+        triple = text_triple if texts else triple_from_nt
         try:
-            lists = [[triple_from_nt(t) for t in wire.get(name) or ()] for name in LISTS]
+            lists = [[triple(t) for t in wire.get(name) or ()] for name in LISTS]
             prefixes = wire.get("prefixes") or {}
             if not isinstance(prefixes, dict):
                 raise MalformedPayload("'prefixes' must be a map")
@@ -104,6 +112,7 @@ class Changeset:
                 prefixes={str(k): str(v) for k, v in prefixes.items()},
                 seq=seq if seq is not None else int(wire.get("seq") or 0),
                 lifespan=float(wire["lifespan"]) if wire.get("lifespan") else None,
+                texts=texts,
             )
         except (TypeError, ValueError) as exc:
             raise MalformedPayload(f"bad changeset field: {exc}") from exc
@@ -112,13 +121,13 @@ class Changeset:
         return cs
 
     @classmethod
-    def decode(cls, payload: bytes, *, published: bool = False) -> Changeset:
-        """Parse a msgpack payload (`published` as in `from_wire`).
+    def decode(cls, payload: bytes, *, published: bool = False, texts: bool = False) -> Changeset:
+        """Parse a msgpack payload (`published` and `texts` as in `from_wire`).
 
         Raises:
             MalformedPayload: not msgpack, or not a changeset.
         """
-        return cls.from_wire(unpack(payload), published=published)
+        return cls.from_wire(unpack(payload), published=published, texts=texts)
 
 
 def _checked(wire: object) -> dict:

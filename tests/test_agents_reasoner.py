@@ -4,11 +4,14 @@ import shutil
 import signal
 import threading
 
+import msgpack
+import zenoh
 from agentprocs import HOSPITAL, REPO, value
 from rdflib import RDF, Literal, Namespace
 
 from agents.firings import rule_names
 from conftest import AC_NS, wait_for
+from space.zconfig import make_config
 
 AC = Namespace(AC_NS)
 
@@ -138,3 +141,27 @@ def test_the_whole_robot_goes_to_charge_and_back_to_its_patient(ts, launch):
     wait_for(lambda: value(ts, AC.robot1, AC.current_task) == AC.task_attending_patient, 60)
     wait_for(lambda: value(ts, AC.robot1, AC.location) == AC.room_102, 20)
     assert value(ts, AC.robot1_speakers, AC.running_mode) == Literal("active")
+
+
+def test_a_term_it_cannot_parse_drops_that_change_only(ts, server, launch):
+    """Changes reach the reasoner as N-Triples texts, parsed when its engine first meets a
+    term: a change with a term that does not parse (here forged on the changes key, as the
+    store never publishes one) is logged and skipped, and the next one is answered."""
+    agent = launch.start("reasoner", "--robot-file", str(HOSPITAL))
+    wait_for(lambda: value(ts, AC.robot1, AC.current_task) == AC.task_idle)
+    seq = ts.write([(AC.robot1, AC.location, AC.hall)]).seq
+    forged = {
+        "v": 1,
+        "id": "forged",
+        "agent": "intruder",
+        "seq": seq + 1,  # the next one: the reasoner takes it as the store's
+        "add": [[f"<{AC_NS}robot1_battery>", f"<{AC_NS}battery_level>", '"very low']],
+    }
+    with zenoh.open(make_config(connect=[server.endpoint])) as plain:
+        plain.put(f"tspace/{ts.space}/@/changes", msgpack.packb(forged))
+    wait_for(lambda: "change forged: not an N-Triples literal" in agent.logs(), 10, "the warning")
+    ts.write([(AC.robot1, AC.location, AC.hall_east)])  # the seq the forged change took
+    ts.write([(AC.robot1_battery, AC.battery_level, Literal("very low"))])
+    wait_for(lambda: value(ts, AC.robot1, AC.current_task) == AC.task_going_to_dock, 20)
+    assert agent.alive()
+    assert value(ts, AC.robot1_battery, AC.battery_level) == Literal("very low")

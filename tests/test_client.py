@@ -153,6 +153,18 @@ def test_subscribe_gives_matching_triples_with_bindings(ts):
     assert seen[0].agent == "test"
 
 
+def test_subscribe_in_texts_gives_the_terms_as_the_wire_has_them(ts):
+    seen = []
+    ts.subscribe(None, seen.append, texts=True)
+    ts.write(ROBOT[3:])
+    wait_for(lambda: seen, what="the change")
+    assert seen[0].added == [(f"<{AC_NS}robot1_battery>", f"<{AC_NS}battery_level>", '"normal"')]
+    assert seen[0].texts
+    for wrong in ({"template": "?b ac:battery_level ?l"}, {"snapshot": True}, {"scope": []}):
+        with pytest.raises(InputError, match="whole changesets"):
+            ts.subscribe(wrong.pop("template", None), seen.append, texts=True, **wrong)
+
+
 def test_unsubscribe_stops_callbacks(ts):
     seen = []
     sub = ts.subscribe(None, seen.append)
