@@ -238,9 +238,17 @@ class Reasoner(Agent):
         """
         engine = self.engine
         assert engine is not None
+        functional: dict[str, bool] = {}  # by predicate: asked once per change
+
+        def is_functional(p: str) -> bool:
+            found = functional.get(p)
+            if found is None:
+                found = functional[p] = any(engine.match_texts(p, _TYPE, _FUNCTIONAL))
+            return found
+
         change = replace_functional(
             added,  # type: ignore[arg-type]
-            lambda p: any(engine.match_texts(p, _TYPE, _FUNCTIONAL)),  # type: ignore[arg-type]
+            is_functional,  # type: ignore[arg-type]
             lambda s, p: [t[2] for t in engine.match_texts(s, p)],  # type: ignore[arg-type]
         )
         return [t for t in change.replaced if t not in removed]

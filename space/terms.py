@@ -131,13 +131,13 @@ def text_triple(parts: object) -> TextTriple:
         MalformedPayload: not three non-empty strings; a literal as subject; a
             predicate that is not an IRI.
     """
-    if (
-        not isinstance(parts, list | tuple)
-        or len(parts) != 3
-        or not all(isinstance(x, str) and x for x in parts)
-    ):
-        raise MalformedPayload(f"a triple is a list of three N-Triples terms, got {parts!r}")
-    s, p, o = parts
-    if s[0] not in "<_" or p[0] != "<" or o[0] not in '<_"':
-        raise MalformedPayload(f"not a valid RDF triple: {list(parts)!r}")
-    return (s, p, o)
+    if type(parts) in _SEQUENCES and len(parts) == 3:  # type: ignore[arg-type]
+        s, p, o = parts  # type: ignore[misc]
+        if type(s) is str and type(p) is str and type(o) is str and s and p and o:
+            if s[0] in "<_" and p[0] == "<" and o[0] in '<_"':
+                return (s, p, o)
+            raise MalformedPayload(f"not a valid RDF triple: {list(parts)!r}")  # type: ignore[call-overload]
+    raise MalformedPayload(f"a triple is a list of three N-Triples terms, got {parts!r}")
+
+
+_SEQUENCES = (list, tuple)  # exactly: a subclass could redefine what unpacking gives

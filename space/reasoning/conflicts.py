@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from rdflib import URIRef
 
@@ -18,6 +19,9 @@ from space.reasoning.support import Support
 from space.reasoning.terms import TermTable
 from space.reasoning.triples import TripleStore
 from space.terms import Triple
+
+if TYPE_CHECKING:
+    from space.reasoning.compile import CompiledRule
 
 CONFLICT = URIRef("https://w3id.org/tspace/reasoning#conflict")
 
@@ -44,11 +48,12 @@ def false(rule: str, bindings: Sequence[Term]) -> Pattern:
 
 
 def read_conflicts(
-    terms: TermTable, store: TripleStore, support: Support, labels: Sequence[str]
+    terms: TermTable, store: TripleStore, support: Support, rules: Sequence[CompiledRule]
 ) -> tuple[Conflict, ...]:
-    """Return the conflicts that hold now, sorted; costs what the conflicts are, not the state.
+    """Return the conflicts that hold now, sorted; costs what the conflicts are, not the state
+    nor the rules (the reasoner asks at every answer).
 
-    `labels` names rules by their order in the engine.
+    `rules`: the engine's, by their order.
     """
     key = terms.find(CONFLICT)
     if key is None:
@@ -59,5 +64,5 @@ def read_conflicts(
         if derivation is None:
             continue
         rule, premises = derivation
-        found.append(Conflict(labels[rule], tuple(terms.triple(p) for p in premises)))  # type: ignore[misc]
+        found.append(Conflict(rules[rule].label, tuple(terms.triple(p) for p in premises)))  # type: ignore[misc]
     return tuple(sorted(found))

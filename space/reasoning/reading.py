@@ -114,8 +114,7 @@ class EngineReads:
 
         Costs what the conflicts are. A conflict goes when one of its triples does.
         """
-        labels = [c.label for c in self._compiled]
-        return read_conflicts(self.terms, self._store, self._support, labels)
+        return read_conflicts(self.terms, self._store, self._support, self._compiled)
 
     def why(self, triple: Triple) -> Why | None:
         """Return why a triple holds: asserted, or a rule and its premises; None if it does not."""
