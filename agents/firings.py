@@ -18,11 +18,11 @@ from collections.abc import Iterable
 from datetime import UTC, datetime
 from typing import TypeVar
 
-from rdflib import Graph, Literal, URIRef
+from rdflib import XSD, Graph, Literal
 from rdflib.term import Node
 
 from agents.vocabulary import AC, RDF_TYPE, RECORD_PREFIX
-from space import TextTriple, Triple, to_nt
+from space import TextTriple, Triple, literal_nt, to_nt, triple_to_nt
 
 AnyTriple = Triple | TextTriple
 T = TypeVar("T", Triple, TextTriple)
@@ -60,18 +60,23 @@ def without_records(triples: Iterable[T], *, texts: bool = False) -> list[T]:
 
 
 class FiringLog:
-    """The firing records this reasoner keeps in the space, oldest first."""
+    """The firing records this reasoner keeps in the space, oldest first.
+
+    Its triples are N-Triples texts, as the reasoner's answers carry them: a record
+    is written with no rdflib term made (`space.literal_nt`).
+    """
 
     def __init__(self, keep: int = 100, prefix: str = FIRING_PREFIX) -> None:
         self.keep = keep
         self.prefix = prefix
         self.next = 1
-        self._records: deque[list[Triple]] = deque()
-        self._answering: tuple[str, Node] | None = None
+        self._records: deque[list[TextTriple]] = deque()
+        self._answering: tuple[str, str] | None = None  # (cause, robot's text)
         self._named: dict[str, None] = {}  # the rule names of the record being answered
 
     def restore(self, triples: Iterable[Triple]) -> None:
-        """Take back this log's records from the space (after a restart), numbering after them."""
+        """Take back this log's records from the space (rdflib terms, as read after a restart),
+        numbering after them."""
         graph = Graph()
         for triple in triples:
             if str(triple[0]).startswith(self.prefix):
@@ -80,63 +85,80 @@ class FiringLog:
         for record in set(graph.subjects()):
             seq = graph.value(record, AC.firing_seq)
             number = int(seq) if isinstance(seq, Literal) and str(seq).isdigit() else 0
-            numbered.append((number, list(graph.triples((record, None, None)))))
+            numbered.append(
+                (number, [tuple(triple_to_nt(t)) for t in graph.triples((record, None, None))])
+            )
         for number, triples_of in sorted(numbered, key=lambda item: item[0]):
-            self._records.append(triples_of)
+            self._records.append(triples_of)  # type: ignore[arg-type]
             self.next = max(self.next, number + 1)
 
     def record(
         self, rules: Iterable[str], cause: str | None, robot: Node, when: datetime | None = None
-    ) -> tuple[list[Triple], list[Triple]]:
+    ) -> tuple[list[TextTriple], list[TextTriple]]:
         """Add the firings of `rules` for `robot`; return (triples to add, triples to drop).
 
         Firings with the same cause and robot as the last record join it: its
         `ac:rule_names` is replaced by one naming the new rules too.
         """
         named = dict.fromkeys(rules)
-        if cause and self._records and self._answering == (cause, robot):
+        robot_text = to_nt(robot)
+        if cause and self._records and self._answering == (cause, robot_text):
             if named.keys() <= self._named.keys():
                 return [], []
             self._named |= named
             record = self._records[-1]
             old = record[1]
-            record[1] = (old[0], RULE_NAMES, Literal(" ".join(self._named)))
+            record[1] = (old[0], _TEXTS.rule_names, literal_nt(" ".join(self._named)))
             return [record[1]], [old]
-        self._answering = (cause, robot) if cause else None
+        self._answering = (cause, robot_text) if cause else None
         self._named = named
-        return self._new(AC.RuleFiring, named, cause, robot, when)
+        return self._new(_TEXTS.firing, named, cause, robot_text, when)
 
     def loop(
         self, rules: Iterable[str], cause: str | None, robot: Node, when: datetime | None = None
-    ) -> tuple[list[Triple], list[Triple]]:
+    ) -> tuple[list[TextTriple], list[TextTriple]]:
         """Add a record of a rule loop (`ac:RuleLoop`): the rules that kept firing, undone.
 
         Returns (triples to add, triples of records to drop), as `record` does.
         """
         self._answering = None
-        return self._new(AC.RuleLoop, rules, cause, robot, when)
+        return self._new(_TEXTS.loop, rules, cause, to_nt(robot), when)
 
     def _new(
         self,
-        kind: URIRef,
+        kind: str,
         rules: Iterable[str],
         cause: str | None,
-        robot: Node,
+        robot: str,
         when: datetime | None,
-    ) -> tuple[list[Triple], list[Triple]]:
-        iri = URIRef(f"{self.prefix}{self.next}")
-        triples: list[Triple] = [  # the names second: `record` replaces them
-            (iri, RDF_TYPE, kind),
-            (iri, RULE_NAMES, Literal(" ".join(rules))),
-            (iri, AC.robot, robot),
-            (iri, AC.fired_at, Literal(when or datetime.now(UTC))),
-            (iri, AC.firing_seq, Literal(self.next)),
+    ) -> tuple[list[TextTriple], list[TextTriple]]:
+        iri, t = f"<{self.prefix}{self.next}>", _TEXTS
+        fired_at = (when or datetime.now(UTC)).isoformat()  # rdflib's lexical form of it
+        triples: list[TextTriple] = [  # the names second: `record` replaces them
+            (iri, t.type, kind),
+            (iri, t.rule_names, literal_nt(" ".join(rules))),
+            (iri, t.robot, robot),
+            (iri, t.fired_at, literal_nt(fired_at, t.datetime)),
+            (iri, t.firing_seq, literal_nt(str(self.next), t.integer)),
         ]
         if cause:
-            triples.append((iri, AC.cause, Literal(cause)))
+            triples.append((iri, t.cause, literal_nt(cause)))
         self.next += 1
         self._records.append(triples)
-        dropped: list[Triple] = []
+        dropped: list[TextTriple] = []
         while len(self._records) > self.keep:
             dropped += self._records.popleft()
         return list(triples), dropped  # a copy: `record` may change the one kept
+
+
+class _Texts:
+    """The N-Triples texts of the terms a record is written with, made once."""
+
+    type = to_nt(RDF_TYPE)
+    firing, loop = to_nt(AC.RuleFiring), to_nt(AC.RuleLoop)
+    rule_names, robot, cause = to_nt(RULE_NAMES), to_nt(AC.robot), to_nt(AC.cause)
+    fired_at, firing_seq = to_nt(AC.fired_at), to_nt(AC.firing_seq)
+    datetime, integer = str(XSD.dateTime), str(XSD.integer)
+
+
+_TEXTS = _Texts

@@ -293,12 +293,12 @@ class Reasoner(Agent):
             fired.setdefault(robot, []).append(firing.rule)
         for robot, rules in fired.items():
             new, old = self.firings.record(rules, cause, robot)
-            added += _texts(new)
-            removed += _texts(old)
+            added += new
+            removed += old
         if loop is not None:
             new, old = self.firings.loop(loop.rules, cause, self.robot)
-            added += _texts(new)
-            removed += _texts(old)
+            added += new
+            removed += old
         if delta.firings:
             # One line per answer: 200 firings logged one by one took milliseconds.
             rules = dict.fromkeys(firing.rule for firing in delta.firings)

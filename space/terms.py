@@ -54,15 +54,21 @@ def to_nt(term: Node) -> str:
     if isinstance(term, URIRef):
         return f"<{term}>"
     if isinstance(term, Literal):
-        text = '"' + _ESCAPE_RE.sub(lambda m: _ESCAPES[m.group(0)], str(term)) + '"'
         if term.language:
-            return f"{text}@{term.language}"
-        if term.datatype is not None and str(term.datatype) != _XSD_STRING:
-            return f"{text}^^<{term.datatype}>"
-        return text
+            return literal_nt(str(term)) + f"@{term.language}"
+        return literal_nt(str(term), None if term.datatype is None else str(term.datatype))
     if isinstance(term, BNode):
         return f"_:{term}"
     raise TypeError(f"not an RDF term: {term!r}")
+
+
+def literal_nt(lexical: str, datatype: str | None = None) -> str:
+    """Return the N-Triples text of a literal from its lexical form and datatype IRI, with
+    no rdflib term made (for writers of texts: the reasoner's firing records)."""
+    text = '"' + _ESCAPE_RE.sub(lambda m: _ESCAPES[m.group(0)], lexical) + '"'
+    if datatype is not None and datatype != _XSD_STRING:
+        return f"{text}^^<{datatype}>"
+    return text
 
 
 @lru_cache(maxsize=CACHED)

@@ -5,6 +5,7 @@ from rdflib import OWL, RDF, Literal, Namespace
 from agents.firings import FiringLog
 from agents.view import View
 from conftest import AC_NS
+from space import triple_from_nt
 
 AC = Namespace(AC_NS)
 FUNCTIONAL = (AC.battery_level, RDF.type, OWL.FunctionalProperty)
@@ -22,7 +23,8 @@ def test_a_functional_value_replaces_the_old_one_even_before_its_removal_arrives
 
 
 def test_a_robots_agent_keeps_neither_records_nor_other_robots_of_a_snapshot():
-    record, _dropped = FiringLog().record(["some_rule"], "cause-1", AC.robot1)
+    texts, _dropped = FiringLog().record(["some_rule"], "cause-1", AC.robot1)
+    record = [triple_from_nt(t) for t in texts]
     mine = [(AC.robot1, RDF.type, AC.Robot), (AC.robot1_battery, AC.charge_percent, Literal(5))]
     site = [
         (AC.hall, AC.crowd_level, Literal("high")),

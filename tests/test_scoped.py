@@ -18,7 +18,7 @@ from space._parts import term_chunk
 from space.changeset import pack, unpack
 from space.keys import part_key
 from space.store.parts import OFTEN
-from space.terms import to_nt
+from space.terms import to_nt, triple_from_nt
 
 AC = Namespace(AC_NS)
 SCOPE = [(AC.robot1, None), ("ac:robot1_*", None)]
@@ -361,7 +361,8 @@ def test_a_robots_hw_monitor_hears_its_robot_and_the_site_not_the_fleet_nor_reco
 
     seen = []
     ts.subscribe(None, seen.append, scope=robot_scope(AC.robot1, HwMonitor.shared))
-    record, _dropped = FiringLog().record(["some_rule"], "cause-1", AC.robot1)
+    texts, _dropped = FiringLog().record(["some_rule"], "cause-1", AC.robot1)
+    record = [triple_from_nt(t) for t in texts]
     ts.write(record)  # the reasoner's record about robot1: not for its agents
     ts.write([level(2, "low"), (AC.robot2, AC.location, AC.hall)])  # another robot's
     ts.write([(AC.hall, AC.crowd_level, Literal("high"))])  # the site: its lasers see it
