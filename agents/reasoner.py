@@ -243,7 +243,7 @@ class Reasoner(Agent):
         def is_functional(p: str) -> bool:
             found = functional.get(p)
             if found is None:
-                found = functional[p] = any(engine.match_texts(p, _TYPE, _FUNCTIONAL))
+                found = functional[p] = engine.holds_texts(p, _TYPE, _FUNCTIONAL)
             return found
 
         change = replace_functional(

@@ -88,6 +88,8 @@ def test_an_update_in_texts_tells_what_one_in_rdflib_terms_tells(
         assert sorted(texts(by_texts.triples())) == sorted(texts(by_terms.triples()))
         for s in NODES:
             assert sorted(by_texts.match_texts(f"<{s}>")) == sorted(texts(by_terms.match(s)))
+        for triple in [*added, *removed]:
+            assert by_texts.holds_texts(*texts([triple])[0]) == (triple in by_terms)
 
 
 def test_a_malformed_text_changes_nothing_and_is_named() -> None:
@@ -112,3 +114,4 @@ def test_a_malformed_text_changes_nothing_and_is_named() -> None:
     assert engine.match_texts("<http://example.org/never>") is not None
     assert list(engine.match_texts("<http://example.org/never>")) == []
     assert list(engine.match_texts('"not a term')) == []
+    assert not engine.holds_texts(*good[:2], '"not a term')

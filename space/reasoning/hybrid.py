@@ -142,6 +142,10 @@ class HybridEngine:
         """`match` with the pattern and the triples as N-Triples texts."""
         return self.backward.match_texts(subject, predicate, obj)
 
+    def holds_texts(self, subject: str, predicate: str, obj: str) -> bool:
+        """`triple in engine` for a triple given as N-Triples texts."""
+        return self.backward.holds_texts(subject, predicate, obj)
+
     def why(self, triple: Triple) -> Why | None:
         """Return why a triple holds, from the layer that concluded it."""
         found = self.backward.why(triple)

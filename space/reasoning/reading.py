@@ -83,6 +83,14 @@ class EngineReads:
         ids = [None if x is None else find(x) for x in (subject, predicate, obj)]
         return self._matching(ids, (subject, predicate, obj), self.terms.texts())
 
+    def holds_texts(self, subject: str, predicate: str, obj: str) -> bool:
+        """`triple in engine` for a triple given as N-Triples texts (the state holds it)."""
+        find = self.terms.find_text
+        ids = (find(subject), find(predicate), find(obj))  # None for a term never seen
+        if ids not in self._store.triples:
+            return False
+        return not self.terms.hidden or self.terms.shown(ids)  # type: ignore[arg-type]
+
     def _matching(
         self, ids: list[int | None], pattern: tuple[object, ...], names: list
     ) -> Iterator[tuple]:
