@@ -208,15 +208,16 @@ class Reasoner(Agent):
         from_reasoner = self.roster is not None and change.agent.startswith(PREFIX)
         if from_reasoner:
             self._ledger.answered(change.cause)
-        added = without_records(change.added, texts=True)
-        removed = without_records(change.removed, texts=True)
-        removed += self._replaced(added, removed)
         engine = self.engine
-        if added or removed:
-            delta, loop = _applying(lambda: engine.apply_texts(added, removed))
-        self.writers.note(change)  # once its terms are known good
+        # In the engine's form of each term, as the texts it answers with and `why` looks
+        # up (the store's differ for some literals); a text that does not parse stops here.
+        added = engine.terms.canonical(without_records(change.added, texts=True))
+        removed = engine.terms.canonical(without_records(change.removed, texts=True))
+        removed += self._replaced(added, removed)
+        self.writers.note(change, added, removed)
         if not added and not removed:
             return
+        delta, loop = _applying(lambda: engine.apply_texts(added, removed))
         if loop is not None:
             self.log.error("change %s: %s; those firings undone, the change kept", change.id, loop)
         if self.roster is not None:

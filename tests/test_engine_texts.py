@@ -115,3 +115,19 @@ def test_a_malformed_text_changes_nothing_and_is_named() -> None:
     assert list(engine.match_texts("<http://example.org/never>")) == []
     assert list(engine.match_texts('"not a term')) == []
     assert not engine.holds_texts(*good[:2], '"not a term')
+
+
+def test_texts_of_one_term_in_other_forms_come_back_in_the_engines_one():
+    """Oxigraph writes a UTC dateTime with Z and 1.0 as "1"^^xsd:double; the engine has one
+    text per term, the one its deltas carry."""
+    engine = build_engine(parse_rules(RULES, default_registry()))
+    xsd = "http://www.w3.org/2001/XMLSchema#"
+    s, p = "<http://example.org/r1>", "<http://example.org/at>"
+    given = [(s, p, f'"2026-01-02T03:04:05Z"^^<{xsd}dateTime>'), (s, p, f'"1"^^<{xsd}double>')]
+    same = [
+        (s, p, f'"2026-01-02T03:04:05+00:00"^^<{xsd}dateTime>'),
+        (s, p, f'"1.0"^^<{xsd}double>'),
+    ]
+    assert engine.terms.canonical(given) == engine.terms.canonical(same) == same
+    delta = engine.apply_texts(given)
+    assert sorted(c.triple for c in delta.added if c.triple[0] == s) == sorted(same)

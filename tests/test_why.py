@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from datetime import UTC, datetime
 
 import pytest
 from agentprocs import HOSPITAL, value
@@ -105,3 +106,23 @@ def test_the_wire_format_example_asks_why_with_zenoh_and_msgpack_only(ts, very_l
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     assert LOW_SPEED in done.stdout and "motion_speed" in done.stdout, done.stdout
+
+
+def test_who_wrote_a_literal_the_store_writes_in_another_form_is_named(ts, very_low, server):
+    """The store republishes a UTC dateTime with `Z` and 1.0 as `"1"^^xsd:double`; the
+    reasoner, which reads changes as texts, still names their writer, and the later one."""
+    started = (AC.robot1, AC.task_started, Literal(datetime(2026, 1, 2, 3, 4, 5, tzinfo=UTC)))
+    weight = (AC.robot1, AC.payload_kg, Literal(1.0))
+    first = ts.write([started, weight])
+    with TripleSpace.open(server.endpoint, space=ts.space, agent="other") as other:
+        other.remove([weight])
+        second = other.write([weight])  # written again: the later writer is named
+
+    def writer(triple: tuple) -> tuple[str, str] | None:
+        trees = ts.why(triple)
+        if not trees or trees[0].written is None:
+            return None
+        return trees[0].written.agent, trees[0].written.changeset
+
+    wait_for(lambda: writer(started) == ("test", first), 10, "the first writer")
+    wait_for(lambda: writer(weight) == ("other", second), 10, "the second writer")

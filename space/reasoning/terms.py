@@ -119,6 +119,25 @@ class TermTable:
             raise MalformedPayload(f"not a triple of N-Triples texts in {triples!r}") from None
         return out
 
+    def canonical(self, triples: Iterable[Sequence[str]]) -> list[TextTriple]:
+        """Return triples given as N-Triples texts in this table's form of each term.
+
+        One term has several texts (Oxigraph writes a UTC dateTime with `Z` and
+        `1.0` as `"1"^^xsd:double`, rdflib `+00:00` and `"1.0"`); the table gives
+        each id one. A caller that keys texts of its own (who wrote what) and compares
+        them with the engine's needs them in that form.
+
+        Raises:
+            MalformedPayload: as `encode_texts`.
+        """
+        texts = None
+        out = []
+        for s, p, o in self.encode_texts(triples):
+            if texts is None:
+                texts = self.texts()
+            out.append((texts[s], texts[p], texts[o]))
+        return out
+
     def find_text(self, text: str) -> int | None:
         """Return the id of a term given as N-Triples text, or None if it was never seen."""
         found = self._by_text.get(text)
