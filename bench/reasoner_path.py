@@ -7,9 +7,10 @@ that path both ways on two engines built alike, run by run in turn, CPU clock:
 - `rdflib terms` (the reasoner before): `Changeset.decode` parses every term into an
   rdflib term, `Engine.apply` encodes them into ids, the `Delta` is decoded back into
   rdflib terms and the answer turns them into N-Triples again;
-- `texts`: `Changeset.decode(texts=True)` leaves the N-Triples texts, `apply_texts` goes
-  from text to id with one dict lookup a term and gives the `Delta` in texts, which the
-  answer packs as they are.
+- `texts`: `Changeset.decode(texts=True)` leaves the N-Triples texts, the engine's term
+  table gives them in its form of each term (`canonical`, as the reasoner does before
+  noting who wrote them), `apply_texts` goes from text to id with one dict lookup a term
+  and gives the `Delta` in texts, which the answer packs as they are.
 
 Cases: the battery goes "very low" and the paper-shaped rules all fire (a few triples in,
 an answer of 2n); then the change that undoes it (2n + 2 triples in, no firing), as the
@@ -42,8 +43,9 @@ def payload(added: list, removed: list, seq: int) -> bytes:
 def answer(engine: Engine, data: bytes, texts: bool) -> bytes:
     """Decode a published change, apply it, and encode the answer: the reasoner's path."""
     cs = Changeset.decode(data, published=True, texts=texts)
-    if texts:
-        delta = engine.apply_texts(cs.added, cs.removed)  # type: ignore[union-attr]
+    if texts:  # in the engine's form of each term first, as the reasoner takes them
+        canonical = engine.terms.canonical
+        delta = engine.apply_texts(canonical(cs.added), canonical(cs.removed))  # type: ignore[arg-type]
     else:
         delta = engine.apply(added=cs.added, removed=cs.removed)
     out = Changeset(
