@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from rdflib.term import Node
 
-from space import TextTriple, triple_to_nt
+from space import TextTriple, text_of
 from space.reasoning import Delta, Engine, Origin
 
 OWED_FOR = 60.0  # seconds: an owner alive this long after a change answers it itself or resyncs
@@ -82,8 +82,8 @@ def present_truth(engine: Engine, deltas: Iterable[Delta]) -> Delta:
 
     The deltas' triples are N-Triples texts (`Engine.apply_texts`), and so are its.
     """
-    asserted = {tuple(triple_to_nt(t)) for t in engine.triples(Origin.ASSERTED)}
-    inferred = {tuple(triple_to_nt(t)) for t in engine.triples(Origin.INFERRED)}
+    asserted = set(map(text_of, engine.triples(Origin.ASSERTED)))
+    inferred = set(map(text_of, engine.triples(Origin.INFERRED)))
     touched_a: dict[TextTriple, None] = {}
     touched_i: dict[TextTriple, None] = {}
     firings = []

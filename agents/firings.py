@@ -22,7 +22,7 @@ from rdflib import XSD, Graph, Literal
 from rdflib.term import Node
 
 from agents.vocabulary import AC, RDF_TYPE, RECORD_PREFIX
-from space import TextTriple, Triple, literal_nt, to_nt, triple_to_nt
+from space import TextTriple, Triple, literal_nt, text_of, to_nt
 
 AnyTriple = Triple | TextTriple
 T = TypeVar("T", Triple, TextTriple)
@@ -37,7 +37,19 @@ def rule_names(triples: Iterable[Triple]) -> list[str]:
 
 
 RECORD_TYPES = frozenset({AC.RuleFiring, AC.RuleLoop})
-_IN_TEXTS = (frozenset(map(to_nt, RECORD_TYPES)), to_nt(RDF_TYPE))  # as the wire has them
+
+
+class _Texts:
+    """The N-Triples texts of the terms a record is written with, made once."""
+
+    type = to_nt(RDF_TYPE)
+    firing, loop = to_nt(AC.RuleFiring), to_nt(AC.RuleLoop)
+    rule_names, robot, cause = to_nt(RULE_NAMES), to_nt(AC.robot), to_nt(AC.cause)
+    fired_at, firing_seq = to_nt(AC.fired_at), to_nt(AC.firing_seq)
+    datetime, integer = str(XSD.dateTime), str(XSD.integer)
+
+
+_RECORD_TEXTS = frozenset({_Texts.firing, _Texts.loop})  # RECORD_TYPES as the wire has them
 
 
 def record_subjects(triples: Iterable[AnyTriple], *, texts: bool = False) -> set:
@@ -47,7 +59,7 @@ def record_subjects(triples: Iterable[AnyTriple], *, texts: bool = False) -> set
     A record is written and dropped whole, its type with it, so the triples of one
     changeset (or a whole state) name their records themselves.
     """
-    kinds, typed = _IN_TEXTS if texts else (RECORD_TYPES, RDF_TYPE)
+    kinds, typed = (_RECORD_TEXTS, _Texts.type) if texts else (RECORD_TYPES, RDF_TYPE)
     return {s for s, p, o in triples if o in kinds and p == typed}  # the set first: fast
 
 
@@ -85,9 +97,7 @@ class FiringLog:
         for record in set(graph.subjects()):
             seq = graph.value(record, AC.firing_seq)
             number = int(seq) if isinstance(seq, Literal) and str(seq).isdigit() else 0
-            numbered.append(
-                (number, [tuple(triple_to_nt(t)) for t in graph.triples((record, None, None))])
-            )
+            numbered.append((number, list(map(text_of, graph.triples((record, None, None))))))
         for number, triples_of in sorted(numbered, key=lambda item: item[0]):
             self._records.append(triples_of)  # type: ignore[arg-type]
             self.next = max(self.next, number + 1)
@@ -108,11 +118,11 @@ class FiringLog:
             self._named |= named
             record = self._records[-1]
             old = record[1]
-            record[1] = (old[0], _TEXTS.rule_names, literal_nt(" ".join(self._named)))
+            record[1] = (old[0], _Texts.rule_names, literal_nt(" ".join(self._named)))
             return [record[1]], [old]
         self._answering = (cause, robot_text) if cause else None
         self._named = named
-        return self._new(_TEXTS.firing, named, cause, robot_text, when)
+        return self._new(_Texts.firing, named, cause, robot_text, when)
 
     def loop(
         self, rules: Iterable[str], cause: str | None, robot: Node, when: datetime | None = None
@@ -122,7 +132,7 @@ class FiringLog:
         Returns (triples to add, triples of records to drop), as `record` does.
         """
         self._answering = None
-        return self._new(_TEXTS.loop, rules, cause, to_nt(robot), when)
+        return self._new(_Texts.loop, rules, cause, to_nt(robot), when)
 
     def _new(
         self,
@@ -132,7 +142,7 @@ class FiringLog:
         robot: str,
         when: datetime | None,
     ) -> tuple[list[TextTriple], list[TextTriple]]:
-        iri, t = f"<{self.prefix}{self.next}>", _TEXTS
+        iri, t = f"<{self.prefix}{self.next}>", _Texts
         fired_at = (when or datetime.now(UTC)).isoformat()  # rdflib's lexical form of it
         triples: list[TextTriple] = [  # the names second: `record` replaces them
             (iri, t.type, kind),
@@ -149,16 +159,3 @@ class FiringLog:
         while len(self._records) > self.keep:
             dropped += self._records.popleft()
         return list(triples), dropped  # a copy: `record` may change the one kept
-
-
-class _Texts:
-    """The N-Triples texts of the terms a record is written with, made once."""
-
-    type = to_nt(RDF_TYPE)
-    firing, loop = to_nt(AC.RuleFiring), to_nt(AC.RuleLoop)
-    rule_names, robot, cause = to_nt(RULE_NAMES), to_nt(AC.robot), to_nt(AC.cause)
-    fired_at, firing_seq = to_nt(AC.fired_at), to_nt(AC.firing_seq)
-    datetime, integer = str(XSD.dateTime), str(XSD.integer)
-
-
-_TEXTS = _Texts

@@ -23,7 +23,7 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import replace
 
 import zenoh
@@ -52,6 +52,7 @@ from space import (
     freeze_startup,
     refreeze,
     replace_functional,
+    text_of,
     to_nt,
     triple_from_nt,
     triple_to_nt,
@@ -277,13 +278,13 @@ class Reasoner(Agent):
         for conflict in conflicts:
             self.log.warning("conflict (cause %s): %s", cause, conflict)
         if inferred_before is None:
-            inferred_added += _texts(new_conflicts)
-            inferred_removed += _texts(gone_conflicts)
+            inferred_added += map(text_of, new_conflicts)
+            inferred_removed += map(text_of, gone_conflicts)
         else:
             now = set(self.engine.triples(Origin.INFERRED)) | self.conflicts.triples()
             inferred_added, inferred_removed = (
-                _texts(now - inferred_before),
-                _texts(inferred_before - now),
+                list(map(text_of, now - inferred_before)),
+                list(map(text_of, inferred_before - now)),
             )
         concluded = list(delta.asserted_added), list(delta.asserted_removed)
         added, removed = list(concluded[0]), list(concluded[1])
@@ -391,19 +392,14 @@ class Reasoner(Agent):
         return self.ts.history(first, last, timeout=self.args.timeout)[0]
 
 
-def _texts(triples: Iterable[Triple]) -> list[TextTriple]:
-    """Return triples of rdflib terms as the N-Triples texts the reasoner's answers carry."""
-    return [tuple(triple_to_nt(t)) for t in triples]  # type: ignore[misc]
-
-
 def in_texts(delta: Delta) -> Delta:
     """Return a `Delta` of rdflib terms (a load's) with the triples an answer writes in texts."""
     return replace(
         delta,
-        asserted_added=tuple(_texts(delta.asserted_added)),
-        asserted_removed=tuple(_texts(delta.asserted_removed)),
-        inferred_added=tuple(_texts(delta.inferred_added)),
-        inferred_removed=tuple(_texts(delta.inferred_removed)),
+        asserted_added=tuple(map(text_of, delta.asserted_added)),
+        asserted_removed=tuple(map(text_of, delta.asserted_removed)),
+        inferred_added=tuple(map(text_of, delta.inferred_added)),
+        inferred_removed=tuple(map(text_of, delta.inferred_removed)),
     )
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Iterable
 
-from space import Changeset, SpaceError, TextTriple, Triple, Written, triple_to_nt
+from space import Changeset, SpaceError, TextTriple, Triple, Written, text_of
 
 log = logging.getLogger("tspace.why")
 
@@ -62,7 +62,7 @@ class Writers:
         Blocks on the store for those (the first `why` after a start); a store that
         does not answer leaves them unknown, it is logged.
         """
-        wanted = {t: tuple(triple_to_nt(t)) for t in triples}  # as they are kept
+        wanted = {t: text_of(t) for t in triples}  # as they are kept
         missing = {t for t in wanted.values() if t not in self._by}
         scanned = 0
         while missing and self._unread >= 1 and scanned < LOG_SCAN_MAX:
@@ -75,7 +75,7 @@ class Writers:
             for cs in reversed(changes):
                 written = Written(cs.agent, cs.timestamp, cs.id, cs.seq)
                 for t in cs.added:  # a later write, noted already, wins
-                    self._by.setdefault(tuple(triple_to_nt(t)), written)  # type: ignore[arg-type]
+                    self._by.setdefault(text_of(t), written)
             scanned += self._unread - first + 1
             self._unread = first - 1
             missing = {t for t in missing if t not in self._by}

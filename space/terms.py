@@ -127,6 +127,12 @@ def triple_to_nt(triple: Triple) -> list[str]:
     return [to_nt(triple[0]), to_nt(triple[1]), to_nt(triple[2])]
 
 
+def text_of(triple: Triple) -> TextTriple:
+    """Return the `(s, p, o)` N-Triples texts of a triple of rdflib terms, as a tuple: the
+    form a reader of texts keeps (`text_triple`) and compares with."""
+    return (to_nt(triple[0]), to_nt(triple[1]), to_nt(triple[2]))
+
+
 def text_triple(parts: object) -> TextTriple:
     """Return a `[s, p, o]` list of N-Triples texts as a tuple, checking its shape only.
 
