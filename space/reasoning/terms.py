@@ -130,13 +130,9 @@ class TermTable:
         Raises:
             MalformedPayload: as `encode_texts`.
         """
-        texts = None
-        out = []
-        for s, p, o in self.encode_texts(triples):
-            if texts is None:
-                texts = self.texts()
-            out.append((texts[s], texts[p], texts[o]))
-        return out
+        ids = self.encode_texts(triples)
+        texts = self.texts()  # after: the new terms' texts too
+        return [(texts[s], texts[p], texts[o]) for s, p, o in ids]
 
     def find_text(self, text: str) -> int | None:
         """Return the id of a term given as N-Triples text, or None if it was never seen."""
