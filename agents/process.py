@@ -11,12 +11,18 @@ from __future__ import annotations
 
 import argparse
 import logging
-import signal
 import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from space import InputError, SpaceError, add_connect, check_lifespan, freeze_startup
+from space import (
+    InputError,
+    SpaceError,
+    add_connect,
+    check_lifespan,
+    freeze_startup,
+    on_stop_signals,
+)
 
 if TYPE_CHECKING:
     from agents.base import Agent
@@ -81,19 +87,15 @@ def run_agent(cls: type[Agent], argv: Sequence[str] | None = None, prog: str | N
         force=True,
     )
     agent = cls(args)
-    previous = {
-        sig: signal.signal(sig, lambda *_: agent.stop()) for sig in (signal.SIGINT, signal.SIGTERM)
-    }
-    try:
-        agent.setup()
-        freeze_startup()
-        agent.run()
-        agent.log.info("stopping")
-        return 0
-    except SpaceError as exc:
-        agent.log.error("%s", exc)
-        return 1
-    finally:
-        agent.shutdown()
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
+    with on_stop_signals(agent.stop):
+        try:
+            agent.setup()
+            freeze_startup()
+            agent.run()
+            agent.log.info("stopping")
+            return 0
+        except SpaceError as exc:
+            agent.log.error("%s", exc)
+            return 1
+        finally:
+            agent.shutdown()

@@ -13,6 +13,7 @@ import importlib
 # side, and a process pays for the parts of the API it touches.
 _HOMES = {
     "space._display": ("triple_text",),
+    "space._stopping": ("on_stop_signals",),
     "space._heap": ("freeze_startup", "refreeze"),
     "space._paths": ("default_data_dir",),
     "space._ports": ("any_free_port", "probe_port=probe"),
@@ -136,6 +137,7 @@ __all__ = [
     "literal_nt",
     "load_identity",
     "make_config",
+    "on_stop_signals",
     "probe_port",
     "read_turtle",
     "refreeze",

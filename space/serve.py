@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import logging
-import signal
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -14,6 +13,7 @@ import zenoh
 
 from space._heap import freeze_startup
 from space._session import open_router
+from space._stopping import on_stop_signals
 from space.errors import InputError
 from space.identity import Identity
 from space.store.guard import WriteGuard
@@ -122,18 +122,11 @@ def _log_transport(event: zenoh.TransportEvent) -> None:
 def serve_forever(**kwargs: object) -> None:
     """Run `open_server(**kwargs)` until SIGINT or SIGTERM; raises what `open_server` raises."""
     stop = threading.Event()
-    previous = {
-        sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)
-    }
-    try:
-        with open_server(**kwargs) as server:  # type: ignore[arg-type]
-            if server is None:
-                log.info("routing only (no store)")
-            else:
-                log.info("serving spaces from %s", server.data_dir)
-            freeze_startup()
-            stop.wait()
-            log.info("stopping")
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
+    with on_stop_signals(stop.set), open_server(**kwargs) as server:  # type: ignore[arg-type]
+        if server is None:
+            log.info("routing only (no store)")
+        else:
+            log.info("serving spaces from %s", server.data_dir)
+        freeze_startup()
+        stop.wait()
+        log.info("stopping")
